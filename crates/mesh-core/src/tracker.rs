@@ -1,0 +1,143 @@
+//! The one trait both tracker backends implement, and what a step reports.
+//!
+//! A simulator owns a `Box<dyn SurfaceTracker>`, proposes new vertex positions each time
+//! step and reads back a clean mesh. The contract that makes it safe to call inside a long
+//! run: a failed [`SurfaceTracker::advance`] returns an error and leaves the previous,
+//! valid mesh exactly as it was.
+
+use std::time::Duration;
+
+use glam::DVec3;
+use serde::Serialize;
+
+use crate::ids::VertexId;
+use crate::mesh::LabeledMesh;
+
+/// A surface tracker backend.
+pub trait SurfaceTracker: Send {
+    /// Short backend name (`"grid"`, `"collision"`).
+    fn name(&self) -> &str;
+
+    /// The current mesh. Between successful steps it always passes `validate()`.
+    fn mesh(&self) -> &LabeledMesh;
+
+    /// Moves towards `proposed` (one position per vertex slot of [`Self::mesh`], indexed by
+    /// `VertexId`; positions of dead slots are ignored), resolves the topology the motion
+    /// implies, improves the mesh, and reports what it did. On error the mesh is unchanged.
+    fn advance(&mut self, proposed: &[DVec3]) -> Result<StepReport, TrackError>;
+}
+
+/// Wall time of one pipeline stage.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct StageTiming {
+    /// Stage name, as in the paper (`"materials"`, `"ccd"`, …).
+    pub stage: &'static str,
+    /// Seconds spent.
+    pub seconds: f64,
+}
+
+/// Counts of the topology changes and mesh edits a step performed.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct TopologyEvents {
+    /// Regions joined (merges / snaps).
+    pub merges: u64,
+    /// Regions pulled apart (splits / pinches).
+    pub splits: u64,
+    /// T1 events: vertex separations.
+    pub t1: u64,
+    /// T2 events: degenerate tetrahedra removed.
+    pub t2: u64,
+    /// Edge splits, flips, collapses and smoothing moves of mesh improvement.
+    pub remeshing_edits: u64,
+}
+
+/// What one successful step did.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct StepReport {
+    /// Time per stage, in pipeline order.
+    pub stages: Vec<StageTiming>,
+    /// Topology changes and edits.
+    pub events: TopologyEvents,
+    /// Live vertices after the step.
+    pub vertices: usize,
+    /// Live triangles after the step.
+    pub triangles: usize,
+    /// Sub-steps taken (time-step halving in the collision backend; 1 otherwise).
+    pub substeps: u32,
+}
+
+impl StepReport {
+    /// Appends a stage timing.
+    pub fn time_stage(&mut self, stage: &'static str, elapsed: Duration) {
+        self.stages.push(StageTiming {
+            stage,
+            seconds: elapsed.as_secs_f64(),
+        });
+    }
+
+    /// Total seconds over all stages.
+    pub fn total_seconds(&self) -> f64 {
+        self.stages.iter().map(|s| s.seconds).sum()
+    }
+}
+
+/// Why a step failed. The tracker's mesh is the one from before the step.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum TrackError {
+    /// `proposed` must have one entry per vertex slot.
+    #[error("proposed positions: expected {expected} (one per vertex slot), got {got}")]
+    ProposalLength {
+        /// `mesh().vertex_capacity()`.
+        expected: usize,
+        /// The length passed in.
+        got: usize,
+    },
+    /// A proposed position is NaN or infinite.
+    #[error("proposed position of vertex {vertex} is not finite: {position:?}")]
+    NonFiniteProposal {
+        /// The vertex.
+        vertex: VertexId,
+        /// The offending position.
+        position: [f64; 3],
+    },
+    /// The mesh handed to the tracker does not satisfy its preconditions.
+    #[error("invalid input mesh: {0}")]
+    InvalidInput(String),
+    /// A stage could not complete within its bounds.
+    #[error("stage `{stage}` failed: {reason}")]
+    StageFailed {
+        /// The stage.
+        stage: &'static str,
+        /// What happened.
+        reason: String,
+    },
+    /// The optional per-step time budget ran out.
+    #[error("time budget of {budget:?} exceeded in stage `{stage}`")]
+    TimeBudgetExceeded {
+        /// The stage running when the budget ran out.
+        stage: &'static str,
+        /// The budget.
+        budget: Duration,
+    },
+}
+
+/// Checks a proposal's length and finiteness against a mesh: the common first stage of
+/// every backend's `advance`.
+pub fn check_proposal(mesh: &LabeledMesh, proposed: &[DVec3]) -> Result<(), TrackError> {
+    if proposed.len() != mesh.vertex_capacity() {
+        return Err(TrackError::ProposalLength {
+            expected: mesh.vertex_capacity(),
+            got: proposed.len(),
+        });
+    }
+    for v in mesh.vertices() {
+        let p = proposed[v.idx()];
+        if !p.is_finite() {
+            return Err(TrackError::NonFiniteProposal {
+                vertex: v,
+                position: p.to_array(),
+            });
+        }
+    }
+    Ok(())
+}
