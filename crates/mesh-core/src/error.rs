@@ -25,6 +25,14 @@ pub enum MeshError {
         /// Actual length.
         got: usize,
     },
+    /// A label value is outside the id space (`u32::MAX` is reserved).
+    #[error("triangle {tri} has label {label}, above the largest allowed label {max}", max = crate::ids::MAX_INDEX)]
+    LabelOutOfRange {
+        /// Index of the offending triangle in the input.
+        tri: usize,
+        /// The label value.
+        label: u32,
+    },
     /// More elements than the `u32` id space allows.
     #[error("too many {what}: {count} exceeds the u32 id space")]
     TooLarge {

@@ -93,8 +93,14 @@ impl LabeledMesh {
             }
             tris.push(tri.map(VertexId::new));
         }
-        let labels = labels.iter().map(|l| l.map(Label::new)).collect();
-        Ok(Self::from_parts(positions, tris, labels))
+        let mut typed_labels = Vec::with_capacity(labels.len());
+        for (t, pair) in labels.iter().enumerate() {
+            if let Some(&bad) = pair.iter().find(|&&l| l > MAX_INDEX) {
+                return Err(MeshError::LabelOutOfRange { tri: t, label: bad });
+            }
+            typed_labels.push(pair.map(Label::new));
+        }
+        Ok(Self::from_parts(positions, tris, typed_labels))
     }
 
     /// Builds a mesh from typed arrays whose indices are known to be in range.

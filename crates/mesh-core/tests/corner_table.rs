@@ -150,6 +150,8 @@ fn from_raw_rejects_bad_indices() {
     let err = LabeledMesh::from_raw(vec![DVec3::ZERO; 3], &[[0, 1, 3]], &[[0, 1]]).unwrap_err();
     assert!(err.to_string().contains("vertex 3"), "{err}");
     assert!(LabeledMesh::from_raw(vec![DVec3::ZERO; 3], &[[0, 1, 2]], &[]).is_err());
+    let err = LabeledMesh::from_raw(vec![DVec3::ZERO; 3], &[[0, 1, 2]], &[[0, u32::MAX]]).unwrap_err();
+    assert!(matches!(err, mesh_core::MeshError::LabelOutOfRange { tri: 0, .. }), "{err}");
 }
 
 #[test]

@@ -1,0 +1,320 @@
+//! Reading and writing labelled meshes: PLY (ASCII and binary) and OBJ.
+//!
+//! Entry points: [`read_mesh`] / [`write_mesh`] pick the format from the file extension
+//! (`.ply` or `.obj`, any case); [`read_ply`], [`write_ply`], [`read_obj`], [`write_obj`]
+//! work on any reader or writer (in-memory buffers for tests and fuzzers). Errors are
+//! [`IoError`]s naming the file and the element, index and line at fault; no input makes
+//! these functions panic.
+//!
+//! # Labels in PLY
+//!
+//! Faces carry two integer properties named exactly `label_front` and `label_back`
+//! (any integer type on read, `int` on write — `uint` if a label exceeds `i32::MAX`):
+//! `label_front` is the material on the side the right-hand normal `(v1−v0)×(v2−v0)` points
+//! into. Vertices need `x y z` (any scalar type; written as `double`); faces need a list
+//! `vertex_indices` (or `vertex_index`) of any integer types, with exactly three entries.
+//! Other properties and elements are skipped, `comment` and `obj_info` lines ignored.
+//! Binary big-endian is read and written too. Anything after the last element of an ASCII
+//! file is ignored; leftover bytes after a binary file's last element are an error
+//! ([`IoErrorKind::TrailingData`]), because they mean the header does not describe the data.
+//!
+//! # Labels in OBJ
+//!
+//! A run of consecutive triangles with label pair `[front, back]` is preceded by
+//! `usemtl label_<front>_<back>` (e.g. `usemtl label_1_0`), so Blender and MeshLab show one
+//! material per interface. The writer keeps triangle order (so ids survive a round trip)
+//! and starts a new run whenever the pair changes; it writes no `.mtl` file and no `g`/`o`
+//! lines. The reader assigns each face the pair of the last `usemtl label_F_B` before it;
+//! material names starting with `label_` are reserved and must have that form. Other
+//! material names, `g`, `o`, `s`, `vt`, `vn`, `mtllib` and unknown keywords are ignored,
+//! as are extra values on `v` lines (`w`, colours) and the texture/normal parts of face
+//! tokens (`v/vt/vn`). Negative (relative) indices are resolved; faces must be triangles
+//! (`l` and `p` lines are rejected as non-triangular faces). Line continuations (`\`)
+//! are not supported. Either every face has a label or none has
+//! ([`IoErrorKind::MixedLabels`]).
+//!
+//! The OBJ reader is hand-written rather than `tobj`: `tobj` splits a file into one model
+//! per material with vertices renumbered per model (so vertices shared by two label groups
+//! come back as two unrelated vertices), drops unreferenced vertices, forgets `usemtl`
+//! names unless an `.mtl` file defines them, reports no line numbers, and overflows on some
+//! relative texture indices in debug builds. The tests use `tobj` to check that what we
+//! write is ordinary OBJ.
+//!
+//! # Unlabelled files
+//!
+//! A PLY without label properties, or an OBJ without `label_` materials, is handled as
+//! [`ReadOptions::unlabeled`] says; by default ([`Unlabeled::ClosedTwoMaterial`]) it must be
+//! a closed, consistently oriented surface, and each connected component gets
+//! `[front, back] = [0, 1]` (outward normals: inside is material 1) or `[1, 0]` if its
+//! enclosed volume is negative (inward normals).
+//!
+//! # Writing
+//!
+//! Writers write the live mesh densely renumbered ([`LabeledMesh::to_raw`]). Positions are
+//! written so that `f64` values read back bit-identical: binary PLY stores `double`, text
+//! uses Rust's shortest round-trip formatting. Non-finite positions are refused.
+
+mod error;
+mod obj;
+mod ply_header;
+mod ply_read;
+mod ply_write;
+mod text;
+mod unlabeled;
+
+#[cfg(test)]
+mod fuzz_tests;
+#[cfg(test)]
+pub(crate) mod test_meshes;
+
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::Path;
+
+use glam::DVec3;
+
+pub use error::{EdgeProblem, Element, IoError, IoErrorKind, Location, MEMORY};
+pub use obj::{read_obj, write_obj};
+pub use ply_read::read_ply;
+pub use ply_write::{PlyFormat, write_ply};
+
+use crate::LabeledMesh;
+
+/// What to do with a file that carries no labels.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Unlabeled {
+    /// Require a closed, consistently oriented surface (every edge used by exactly two
+    /// triangles in opposite directions; otherwise [`IoErrorKind::NotClosed`] names the
+    /// first offending edge) and give each connected component `[0, 1]` if its normals point
+    /// outwards, `[1, 0]` if inwards: a two-material mesh with label 1 inside.
+    #[default]
+    ClosedTwoMaterial,
+    /// Give every triangle `[0, 1]` (normals assumed to point outwards) without any check —
+    /// for inspecting open or broken surfaces; `validate` will report what is wrong.
+    AssumeOutward,
+    /// Refuse unlabelled files ([`IoErrorKind::Unlabeled`]).
+    Error,
+}
+
+/// Options for the readers. `ReadOptions::default()` is what [`read_mesh`] uses.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ReadOptions {
+    /// Treatment of files without labels.
+    pub unlabeled: Unlabeled,
+}
+
+/// The file formats, chosen by extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeshFormat {
+    /// Stanford PLY (`.ply`).
+    Ply,
+    /// Wavefront OBJ (`.obj`).
+    Obj,
+}
+
+impl MeshFormat {
+    /// The format named by the extension of `path` (case-insensitive).
+    pub fn from_path(path: &Path) -> Result<MeshFormat, IoError> {
+        let extension = path
+            .extension()
+            .map(|e| e.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        match extension.to_ascii_lowercase().as_str() {
+            "ply" => Ok(MeshFormat::Ply),
+            "obj" => Ok(MeshFormat::Obj),
+            _ => Err(IoError::at_path(
+                path,
+                IoErrorKind::UnknownExtension { extension },
+            )),
+        }
+    }
+}
+
+/// Reads a `.ply` or `.obj` file with default options (see [`read_mesh_with`]).
+pub fn read_mesh(path: &Path) -> Result<LabeledMesh, IoError> {
+    read_mesh_with(path, &ReadOptions::default())
+}
+
+/// Reads a `.ply` or `.obj` file (chosen by extension, case-insensitive).
+pub fn read_mesh_with(path: &Path, options: &ReadOptions) -> Result<LabeledMesh, IoError> {
+    let format = MeshFormat::from_path(path)?;
+    if path.is_dir() {
+        return Err(IoError::at_path(path, IoErrorKind::IsDirectory));
+    }
+    let bytes = std::fs::read(path).map_err(|e| IoError::at_path(path, IoErrorKind::Io(e)))?;
+    match format {
+        MeshFormat::Ply => ply_read::ply_from_bytes(&bytes, options),
+        MeshFormat::Obj => obj::obj_from_bytes(&bytes, options),
+    }
+    .map_err(|kind| IoError::at_path(path, kind))
+}
+
+/// Writes a `.ply` (binary little-endian) or `.obj` file, chosen by extension.
+/// The file is created or truncated.
+pub fn write_mesh(mesh: &LabeledMesh, path: &Path) -> Result<(), IoError> {
+    let format = MeshFormat::from_path(path)?;
+    if path.is_dir() {
+        return Err(IoError::at_path(path, IoErrorKind::IsDirectory));
+    }
+    let file = File::create(path).map_err(|e| IoError::at_path(path, IoErrorKind::Io(e)))?;
+    let writer = BufWriter::with_capacity(1 << 16, file);
+    match format {
+        MeshFormat::Ply => write_ply(mesh, writer, PlyFormat::BinaryLittleEndian),
+        MeshFormat::Obj => write_obj(mesh, writer),
+    }
+    .map_err(|e| e.with_path(path))
+}
+
+/// Plain arrays as read from a file, before labels are settled.
+pub(crate) struct RawMesh {
+    pub(crate) positions: Vec<DVec3>,
+    pub(crate) tris: Vec<[u32; 3]>,
+    /// `None` when the file has no labels.
+    pub(crate) labels: Option<Vec<[u32; 2]>>,
+}
+
+impl RawMesh {
+    /// Builds the mesh, settling missing labels as `options` say.
+    pub(crate) fn into_mesh(self, options: &ReadOptions) -> Result<LabeledMesh, IoErrorKind> {
+        let check_closed =
+            self.labels.is_none() && options.unlabeled == Unlabeled::ClosedTwoMaterial;
+        let labels = match self.labels {
+            Some(labels) => labels,
+            None if options.unlabeled == Unlabeled::Error => return Err(IoErrorKind::Unlabeled),
+            None => vec![[0, 1]; self.tris.len()],
+        };
+        let mut mesh = LabeledMesh::from_raw(self.positions, &self.tris, &labels)
+            .map_err(IoErrorKind::Mesh)?;
+        if check_closed {
+            unlabeled::label_closed_components(&mut mesh)?;
+        }
+        Ok(mesh)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::test_meshes::{assert_same_raw, two_tets};
+    use super::*;
+
+    fn tmp() -> tempfile::TempDir {
+        tempfile::tempdir().unwrap()
+    }
+
+    #[test]
+    fn round_trips_are_exact_in_every_format() {
+        let mesh = two_tets();
+        for format in [
+            PlyFormat::Ascii,
+            PlyFormat::BinaryLittleEndian,
+            PlyFormat::BinaryBigEndian,
+        ] {
+            let mut buf = Vec::new();
+            write_ply(&mesh, &mut buf, format).unwrap();
+            let back = read_ply(&buf[..], &ReadOptions::default()).unwrap();
+            assert_same_raw(&mesh, &back);
+        }
+        let mut buf = Vec::new();
+        write_obj(&mesh, &mut buf).unwrap();
+        let back = read_obj(&buf[..], &ReadOptions::default()).unwrap();
+        assert_same_raw(&mesh, &back);
+    }
+
+    #[test]
+    fn path_entry_points_dispatch_on_extension_case_insensitively() {
+        let dir = tmp();
+        let mesh = two_tets();
+        for name in ["a.ply", "b.OBJ", "c.Ply"] {
+            let path = dir.path().join(name);
+            write_mesh(&mesh, &path).unwrap();
+            assert_same_raw(&mesh, &read_mesh(&path).unwrap());
+        }
+        let head = std::fs::read(dir.path().join("a.ply")).unwrap();
+        assert!(head.starts_with(b"ply\nformat binary_little_endian 1.0\n"));
+    }
+
+    #[test]
+    fn path_errors_name_the_file() {
+        let dir = tmp();
+        let mesh = two_tets();
+        let unknown = dir.path().join("mesh.stl");
+        let e = write_mesh(&mesh, &unknown).unwrap_err();
+        assert!(
+            matches!(&e.kind, IoErrorKind::UnknownExtension { extension } if extension == "stl")
+        );
+        assert!(e.file.ends_with("mesh.stl"));
+        let e = read_mesh(&dir.path().join("noext")).unwrap_err();
+        assert!(
+            matches!(&e.kind, IoErrorKind::UnknownExtension { extension } if extension.is_empty())
+        );
+
+        let as_dir = dir.path().join("folder.ply");
+        std::fs::create_dir(&as_dir).unwrap();
+        assert!(matches!(
+            read_mesh(&as_dir).unwrap_err().kind,
+            IoErrorKind::IsDirectory
+        ));
+        assert!(matches!(
+            write_mesh(&mesh, &as_dir).unwrap_err().kind,
+            IoErrorKind::IsDirectory
+        ));
+
+        let missing = dir.path().join("nowhere").join("x.obj");
+        let e = write_mesh(&mesh, &missing).unwrap_err();
+        assert!(matches!(e.kind, IoErrorKind::Io(_)));
+        assert!(e.to_string().contains("nowhere"));
+        let e = read_mesh(&missing).unwrap_err();
+        assert!(matches!(e.kind, IoErrorKind::Io(_)));
+
+        let bad = dir.path().join("bad.ply");
+        std::fs::write(
+            &bad,
+            b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n",
+        )
+        .unwrap();
+        let e = read_mesh(&bad).unwrap_err();
+        assert!(e.file.ends_with("bad.ply"), "{e}");
+        assert!(matches!(e.kind, IoErrorKind::MissingProperty { .. }));
+        let e = read_ply(&b""[..], &ReadOptions::default()).unwrap_err();
+        assert_eq!(e.file, MEMORY);
+        assert!(matches!(e.kind, IoErrorKind::Empty));
+    }
+
+    #[test]
+    fn unlabeled_policies() {
+        // A closed outward tetrahedron as PLY without labels.
+        let ply = b"ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
+element face 4\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n\
+3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n";
+        let closed = read_ply(&ply[..], &ReadOptions::default()).unwrap();
+        assert_eq!(closed.to_raw().2, vec![[0, 1]; 4]);
+        let error = ReadOptions {
+            unlabeled: Unlabeled::Error,
+        };
+        assert!(matches!(
+            read_ply(&ply[..], &error).unwrap_err().kind,
+            IoErrorKind::Unlabeled
+        ));
+        // Open (3 faces): an error by default, accepted as [0, 1] when asked.
+        let open = &ply[..ply.len() - "3 0 3 2\n".len()];
+        let open = String::from_utf8_lossy(open).replace("element face 4", "element face 3");
+        let e = read_ply(open.as_bytes(), &ReadOptions::default()).unwrap_err();
+        assert!(
+            matches!(
+                e.kind,
+                IoErrorKind::NotClosed {
+                    edge: [0, 2],
+                    problem: EdgeProblem::Boundary
+                }
+            ),
+            "{e}"
+        );
+        let assume = ReadOptions {
+            unlabeled: Unlabeled::AssumeOutward,
+        };
+        assert_eq!(
+            read_ply(open.as_bytes(), &assume).unwrap().to_raw().2,
+            vec![[0, 1]; 3]
+        );
+    }
+}

@@ -1,0 +1,196 @@
+//! Byte-level scanning shared by the text formats (PLY headers, ASCII PLY, OBJ): numbered
+//! lines, whitespace-separated tokens, and number parsing.
+//!
+//! Everything works on `&[u8]` borrowed from the input: no line or token is copied, and a
+//! stray non-UTF-8 byte in an OBJ comment costs nothing (only tokens that must be numbers
+//! are required to be ASCII).
+
+/// Lines of a byte buffer with their 1-based numbers; `\n` and `\r\n` endings are removed.
+pub(crate) struct Lines<'a> {
+    bytes: &'a [u8],
+    pos: usize,
+    number: u64,
+}
+
+impl<'a> Lines<'a> {
+    /// Lines of `bytes`, the first numbered 1.
+    pub(crate) fn new(bytes: &'a [u8]) -> Self {
+        Self::starting_at(bytes, 0, 1)
+    }
+
+    /// Lines of `bytes` from byte offset `pos`, the first numbered `number`.
+    pub(crate) fn starting_at(bytes: &'a [u8], pos: usize, number: u64) -> Self {
+        Lines {
+            bytes,
+            pos: pos.min(bytes.len()),
+            number,
+        }
+    }
+
+    /// Byte offset just after the last line returned (its `\n` included).
+    pub(crate) fn offset(&self) -> usize {
+        self.pos
+    }
+
+    /// The number the next line will get.
+    pub(crate) fn next_number(&self) -> u64 {
+        self.number
+    }
+}
+
+impl<'a> Iterator for Lines<'a> {
+    type Item = (u64, &'a [u8]);
+
+    #[inline]
+    fn next(&mut self) -> Option<(u64, &'a [u8])> {
+        let rest = self.bytes.get(self.pos..).filter(|r| !r.is_empty())?;
+        let (mut line, advance) = match rest.iter().position(|&b| b == b'\n') {
+            Some(end) => (&rest[..end], end + 1),
+            None => (rest, rest.len()),
+        };
+        if let [head @ .., b'\r'] = line {
+            line = head;
+        }
+        self.pos += advance;
+        let number = self.number;
+        self.number += 1;
+        Some((number, line))
+    }
+}
+
+/// Whitespace-separated tokens of one line.
+#[derive(Clone)]
+pub(crate) struct Tokens<'a> {
+    rest: &'a [u8],
+}
+
+impl<'a> Tokens<'a> {
+    /// Tokens of `line`.
+    pub(crate) fn new(line: &'a [u8]) -> Self {
+        Tokens { rest: line }
+    }
+
+    /// The rest of the line after the tokens taken so far, without leading whitespace.
+    pub(crate) fn remainder(&self) -> &'a [u8] {
+        let start = self
+            .rest
+            .iter()
+            .position(|b| !b.is_ascii_whitespace())
+            .unwrap_or(self.rest.len());
+        &self.rest[start..]
+    }
+}
+
+impl<'a> Iterator for Tokens<'a> {
+    type Item = &'a [u8];
+
+    #[inline]
+    fn next(&mut self) -> Option<&'a [u8]> {
+        let start = self.rest.iter().position(|b| !b.is_ascii_whitespace())?;
+        let rest = &self.rest[start..];
+        let end = rest
+            .iter()
+            .position(|b| b.is_ascii_whitespace())
+            .unwrap_or(rest.len());
+        self.rest = &rest[end..];
+        Some(&rest[..end])
+    }
+}
+
+/// True if the line holds only whitespace.
+#[inline]
+pub(crate) fn is_blank(line: &[u8]) -> bool {
+    line.iter().all(u8::is_ascii_whitespace)
+}
+
+/// Parses a decimal integer `[+-]?[0-9]+` that fits in `i64`.
+#[inline]
+pub(crate) fn parse_int(tok: &[u8]) -> Option<i64> {
+    let (negative, digits) = match tok {
+        [b'-', rest @ ..] => (true, rest),
+        [b'+', rest @ ..] => (false, rest),
+        _ => (false, tok),
+    };
+    if digits.is_empty() {
+        return None;
+    }
+    // Accumulate negatively so that i64::MIN parses too.
+    let mut value: i64 = 0;
+    for &b in digits {
+        let d = b.wrapping_sub(b'0');
+        if d > 9 {
+            return None;
+        }
+        value = value.checked_mul(10)?.checked_sub(i64::from(d))?;
+    }
+    if negative {
+        Some(value)
+    } else {
+        value.checked_neg()
+    }
+}
+
+/// Parses a floating-point number as Rust does (`1`, `-2.5e-3`, `inf`, `NaN`, …); callers
+/// reject non-finite results themselves so that the error says "not finite", not "bad".
+#[inline]
+pub(crate) fn parse_float(tok: &[u8]) -> Option<f64> {
+    std::str::from_utf8(tok).ok()?.parse().ok()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lines_strip_endings_and_count() {
+        let text = b"ply\r\nformat ascii 1.0\n\nlast";
+        let mut lines = Lines::new(text);
+        assert_eq!(lines.next(), Some((1, &b"ply"[..])));
+        assert_eq!(lines.offset(), 5);
+        assert_eq!(lines.next(), Some((2, &b"format ascii 1.0"[..])));
+        assert_eq!(lines.next(), Some((3, &b""[..])));
+        assert_eq!(lines.next(), Some((4, &b"last"[..])));
+        assert_eq!(lines.next(), None);
+        assert_eq!(lines.offset(), text.len());
+    }
+
+    #[test]
+    fn tokens_split_on_any_whitespace() {
+        let toks: Vec<&[u8]> = Tokens::new(b"  f\t1/2/3  -4 \x0c5 ").collect();
+        assert_eq!(toks, vec![&b"f"[..], b"1/2/3", b"-4", b"5"]);
+        let mut t = Tokens::new(b"usemtl  label_1_0 x ");
+        t.next();
+        assert_eq!(t.remainder(), b"label_1_0 x ");
+    }
+
+    #[test]
+    fn integers_parse_strictly_with_overflow_checks() {
+        assert_eq!(parse_int(b"0"), Some(0));
+        assert_eq!(parse_int(b"+17"), Some(17));
+        assert_eq!(parse_int(b"-9223372036854775808"), Some(i64::MIN));
+        assert_eq!(parse_int(b"9223372036854775807"), Some(i64::MAX));
+        assert_eq!(parse_int(b"9223372036854775808"), None);
+        for bad in [
+            &b""[..],
+            b"-",
+            b"1.0",
+            b"1e3",
+            b"0x10",
+            b"12a",
+            "٣".as_bytes(),
+        ] {
+            assert_eq!(parse_int(bad), None, "{bad:?}");
+        }
+    }
+
+    #[test]
+    fn floats_parse_including_non_finite() {
+        assert_eq!(parse_float(b"-2.5e-3"), Some(-2.5e-3));
+        assert_eq!(parse_float(b"1"), Some(1.0));
+        assert!(parse_float(b"nan").is_some_and(f64::is_nan));
+        assert_eq!(parse_float(b"-inf"), Some(f64::NEG_INFINITY));
+        assert_eq!(parse_float(b"1e999"), Some(f64::INFINITY));
+        assert_eq!(parse_float(b"1,5"), None);
+        assert_eq!(parse_float(&[0xff]), None);
+    }
+}
