@@ -1,1 +1,54 @@
-//! placeholder
+//! Exact geometric predicates: orientation tests, axis-aligned ray crossings with
+//! Simulation of Simplicity, and closed triangle–triangle intersection.
+//!
+//! Every function here returns a decision that is exact for finite `f64` input (products
+//! of coordinate differences must neither overflow nor underflow, as for Shewchuk's
+//! predicates), does not allocate, and does not panic. Floating-point filters make the
+//! common case cheap; the exact path runs only when the filter cannot certify the answer.
+//!
+//! # Sign convention
+//!
+//! [`orient3d`]`(a, b, c, d)` is the sign of `((b − a) × (c − a)) · (d − a)`: `Positive`
+//! when `d` is in front of triangle `a, b, c`, i.e. on the side its right-hand normal
+//! points into — the side of the `front` label of a mesh triangle. (`robust`'s raw
+//! `orient3d` has the opposite sign; never call it directly.) [`orient2d`]`(a, b, c)` is
+//! `Positive` when `a, b, c` turn counter-clockwise. Projections along an [`Axis`] keep
+//! the other two coordinates in cyclic order, so a triangle whose normal has a positive
+//! `axis` component projects counter-clockwise.
+//!
+//! # Glossary
+//!
+//! - **closed** test: touching (sharing a single boundary point) counts as intersecting.
+//! - **degenerate** triangle: collinear (or coincident) vertices, zero normal; treated as
+//!   the segment or point it spans.
+//! - **SoS**, Simulation of Simplicity (Edelsbrunner & Mücke 1990): every ray-query point
+//!   `p` stands for `p + (ε, ε², ε³)` with infinitesimal `ε > 0`, so no query is ever
+//!   degenerate; see [`crossing`] for what this buys the grid tracker.
+//! - **filter**: a floating-point evaluation with a proven error bound that settles easy
+//!   cases before the exact (adaptive-precision) evaluation.
+//!
+//! # Entry points
+//!
+//! - [`orient2d`], [`orient3d`], [`orient2d_axis`], with [`Sign`] and [`Axis`];
+//! - [`cross_axis_line_triangle`], [`cross_axis_segment_triangle`],
+//!   [`compare_crossing_with_point`] for material-vector ray casting;
+//! - [`intersect_triangle_triangle`], [`intersect_segment_triangle`], and for mesh
+//!   validation [`intersect_sharing_vertex`] and [`intersect_sharing_edge`].
+
+pub mod crossing;
+pub mod orient;
+mod planar;
+pub mod tri_tri;
+
+#[cfg(test)]
+mod exact_ref;
+
+pub use crossing::{
+    AxisCrossing, compare_crossing_with_point, cross_axis_line_triangle,
+    cross_axis_segment_triangle,
+};
+pub use orient::{Axis, Sign, orient2d, orient2d_axis, orient3d};
+pub use tri_tri::{
+    intersect_segment_triangle, intersect_sharing_edge, intersect_sharing_vertex,
+    intersect_triangle_triangle,
+};
