@@ -77,7 +77,7 @@ fn certified(d: f64, bound: f64) -> Option<Sign> {
 /// True when every point of `pts` is *certainly* strictly on one side of the plane of
 /// `t`: the branch-free early rejection. `false` proves nothing.
 #[inline]
-fn certainly_separated<const N: usize>(t: &[DVec3; 3], pts: &[DVec3; N]) -> bool {
+pub(crate) fn certainly_separated<const N: usize>(t: &[DVec3; 3], pts: &[DVec3; N]) -> bool {
     let (n, perm) = normal_and_permanent(t);
     let mut above = true;
     let mut below = true;
