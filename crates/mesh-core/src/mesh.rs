@@ -470,6 +470,29 @@ impl LabeledMesh {
         self.scratch = group;
     }
 
+    /// Re-pairs every edge of every triangle incident to `v` from the current geometry:
+    /// call after moving `v`, since the radial order around a non-manifold edge depends on
+    /// the positions of its ends and of its triangles' third vertices.
+    pub fn relink_around(&mut self, v: VertexId) {
+        if !self.is_vertex_alive(v) {
+            return;
+        }
+        let mut at = self.ring_head[v];
+        let mut budget = self.tris.len();
+        while let (Some(c), Some(rest)) = (at, budget.checked_sub(1)) {
+            budget = rest;
+            at = self.ring_next[ring_slot(c)];
+            let tri = self.tris[c.tri()];
+            for k in 0..3 {
+                let (a, b) = (tri[(k + 1) % 3], tri[(k + 2) % 3]);
+                // Two-triangle edges pair the same way whatever the geometry.
+                if self.edge_triangles(a, b).nth(2).is_some() {
+                    self.relink_edge(a, b);
+                }
+            }
+        }
+    }
+
     /// Renumbers live vertices and triangles densely (keeping their relative order) and
     /// drops free slots. Returns the old → new maps so callers can carry their own data.
     pub fn compact(&mut self) -> Compaction {

@@ -1,0 +1,294 @@
+//! Degenerate removal (T2 processes, Los Topos §6; El Topo §3.6): regions that collapsed to
+//! zero volume, and triangles that collapsed to a segment or a point.
+//!
+//! An edge collapse or flip can flatten a small closed region — typically a tetrahedron —
+//! into two triangles on the same three vertices. Their labels are still consistent: the
+//! zero-volume region "between" them carries one label `X` on both inner sides. If the
+//! materials outside the pair differ (`L1 ≠ L2`), one triangle is deleted and the other
+//! relabelled `[L1 | L2]`, keeping the interface between them; if they agree, both are
+//! deleted and the two outer regions merge. Which sides are inner is decided from labels
+//! alone — the corner table cannot tell coincident sheets apart — by the rule that the
+//! two facing sides must carry the same label (when both readings are consistent, both
+//! say "delete both", so the outcome does not depend on the choice; see `classify`).
+//!
+//! Triangles with a repeated vertex are deleted outright. Every removal is one [`Edit`]
+//! through [`apply_edit`], so a guard may veto it; vertices left without triangles are
+//! removed by the same edit.
+
+use rayon::prelude::*;
+
+use crate::corner::Side;
+use crate::ids::{CornerId, Label, TriId, VertexId};
+use crate::mesh::LabeledMesh;
+
+use super::attributes::VertexAttributes;
+use super::edit::{Edit, EditError, VertexRef, apply_edit};
+use super::guard::EditGuard;
+
+/// Bound on the duplicate-finding passes: one pass resolves every pair; more are needed
+/// only where three or more triangles share a vertex set.
+const MAX_PASSES: usize = 8;
+
+/// What [`remove_degenerate`] did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct DegenerateReport {
+    /// Triangles with a repeated vertex deleted.
+    pub collapsed_removed: usize,
+    /// Coincident pairs between different materials: one deleted, one relabelled.
+    pub pairs_relabelled: usize,
+    /// Coincident pairs between the same material: both deleted.
+    pub pairs_removed: usize,
+    /// Isolated vertices removed with them.
+    pub vertices_removed: usize,
+    /// Edits the guard refused (counted per attempt).
+    pub vetoed: usize,
+    /// Groups of coincident triangles whose labels describe no zero-volume region (left
+    /// for validation to report).
+    pub unresolved: usize,
+}
+
+/// How a coincident pair resolves.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Resolution {
+    /// Delete both: the outer materials agree.
+    DeleteBoth,
+    /// Delete the second and give the first these labels.
+    Relabel([Label; 2]),
+}
+
+/// Removes collapsed triangles and zero-volume regions (see the module doc).
+pub fn remove_degenerate(
+    mesh: &mut LabeledMesh,
+    attrs: &mut VertexAttributes,
+    guard: &mut dyn EditGuard,
+) -> DegenerateReport {
+    let mut report = DegenerateReport::default();
+    let mut edit = Edit::default();
+
+    let collapsed: Vec<TriId> = mesh
+        .triangles()
+        .filter(|&t| is_collapsed(mesh.tri(t)))
+        .collect();
+    for t in collapsed {
+        edit.clear();
+        edit.remove_tris.push(t);
+        remove_orphans(mesh, &mut edit);
+        if commit(mesh, attrs, guard, &edit, &mut report) {
+            report.collapsed_removed += 1;
+        }
+    }
+
+    let mut keyed: Vec<([VertexId; 3], TriId)> = Vec::new();
+    for _ in 0..MAX_PASSES {
+        keyed.clear();
+        keyed.par_extend(mesh.tris().par_iter().enumerate().filter_map(|(t, tri)| {
+            let t = TriId::new(t as u32);
+            (mesh.is_triangle_alive(t) && may_have_duplicate(mesh, t)).then(|| {
+                let mut key = *tri;
+                key.sort_unstable();
+                (key, t)
+            })
+        }));
+        keyed.par_sort_unstable();
+        let mut changed = false;
+        report.unresolved = 0;
+        for group in keyed.chunk_by(|x, y| x.0 == y.0) {
+            if group.len() < 2 {
+                continue;
+            }
+            let pair = (0..group.len())
+                .flat_map(|i| (i + 1..group.len()).map(move |j| (group[i].1, group[j].1)))
+                .find_map(|(t1, t2)| classify(mesh, t1, t2).map(|r| (t1, t2, r)));
+            let Some((t1, t2, resolution)) = pair else {
+                report.unresolved += 1;
+                continue;
+            };
+            edit.clear();
+            edit.remove_tris.extend([t1, t2]);
+            if let Resolution::Relabel(labels) = resolution {
+                edit.add_tris
+                    .push((mesh.tri(t1).map(VertexRef::Old), labels));
+            }
+            remove_orphans(mesh, &mut edit);
+            if commit(mesh, attrs, guard, &edit, &mut report) {
+                changed = true;
+                match resolution {
+                    Resolution::DeleteBoth => report.pairs_removed += 1,
+                    Resolution::Relabel(_) => report.pairs_relabelled += 1,
+                }
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    report
+}
+
+/// True when another triangle on `t`'s edge `v0 v1` has `t`'s third vertex — necessary
+/// for a duplicate, since coincident triangles share all three edges. Walking the radial
+/// cycle of one edge (two corners on a manifold edge) is much cheaper than sorting every
+/// triangle's vertex set; an open cycle falls back to the vertex ring, which lists every
+/// triangle at `v0` whatever the corner table says.
+fn may_have_duplicate(mesh: &LabeledMesh, t: TriId) -> bool {
+    let [a, b, c] = mesh.tri(t);
+    if is_collapsed([a, b, c]) {
+        return false;
+    }
+    let start = CornerId::of(t, Side::Front, 2);
+    let mut last = start;
+    for r in mesh.radial_corners(start) {
+        if r.tri() != t && mesh.corner_vertex(r) == c {
+            return true;
+        }
+        last = r;
+    }
+    if mesh.opposite(last).map(CornerId::dual) == Some(start) {
+        return false;
+    }
+    mesh.edge_triangles(a, b)
+        .any(|u| u != t && mesh.tri(u).contains(&c))
+}
+
+fn is_collapsed([a, b, c]: [VertexId; 3]) -> bool {
+    a == b || b == c || c == a
+}
+
+/// Applies `edit`, counting vetoes and removed vertices; true when applied.
+fn commit(
+    mesh: &mut LabeledMesh,
+    attrs: &mut VertexAttributes,
+    guard: &mut dyn EditGuard,
+    edit: &Edit,
+    report: &mut DegenerateReport,
+) -> bool {
+    match apply_edit(mesh, attrs, guard, edit) {
+        Ok(_) => {
+            report.vertices_removed += edit.remove_vertices.len();
+            true
+        }
+        Err(EditError::Vetoed(_)) => {
+            report.vetoed += 1;
+            false
+        }
+        // Malformed cannot happen (ids are live and distinct); nothing changed either way.
+        Err(_) => false,
+    }
+}
+
+/// Adds to `edit.remove_vertices` every vertex of a removed triangle that no kept or added
+/// triangle uses.
+pub(crate) fn remove_orphans(mesh: &LabeledMesh, edit: &mut Edit) {
+    for i in 0..edit.remove_tris.len() {
+        for v in mesh.tri(edit.remove_tris[i]) {
+            let used_by_kept = mesh
+                .vertex_triangles(v)
+                .any(|t| !edit.remove_tris.contains(&t));
+            let used_by_added = edit
+                .add_tris
+                .iter()
+                .any(|(verts, _)| verts.contains(&VertexRef::Old(v)));
+            if !used_by_kept && !used_by_added && !edit.remove_vertices.contains(&v) {
+                edit.remove_vertices.push(v);
+            }
+        }
+    }
+}
+
+/// How the coincident triangles `t1`, `t2` resolve, or `None` if their labels describe no
+/// zero-volume region.
+///
+/// With equal orientations the facing sides are (front₁, back₂) or (back₁, front₂); with
+/// opposite orientations (front₁, front₂) or (back₁, back₂). A reading is consistent when
+/// the facing sides share a label `X`. If both readings are consistent, then reading one's
+/// outer labels are reading two's inner ones (and vice versa), so both readings see equal
+/// outer labels and both delete the pair.
+fn classify(mesh: &LabeledMesh, t1: TriId, t2: TriId) -> Option<Resolution> {
+    let (p, q) = (mesh.tri(t1), mesh.tri(t2));
+    if is_collapsed(p) {
+        return None;
+    }
+    let same_orientation = (0..3).any(|r| [q[r], q[(r + 1) % 3], q[(r + 2) % 3]] == p);
+    let (l1, l2) = (mesh.labels(t1), mesh.labels(t2));
+    let readings = if same_orientation {
+        [(Side::Front, Side::Back), (Side::Back, Side::Front)]
+    } else {
+        [(Side::Front, Side::Front), (Side::Back, Side::Back)]
+    };
+    let (s1, s2) = readings
+        .into_iter()
+        .find(|&(s1, s2)| l1[s1.index()] == l2[s2.index()])?;
+    let outer1 = l1[s1.flip().index()];
+    let outer2 = l2[s2.flip().index()];
+    if outer1 == outer2 {
+        return Some(Resolution::DeleteBoth);
+    }
+    // t1's inner side now faces what t2's outer side faced.
+    let mut labels = l1;
+    labels[s1.index()] = outer2;
+    Some(Resolution::Relabel(labels))
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec3;
+
+    use super::*;
+    use crate::remesh::NoGuard;
+
+    fn mesh_of(tris: &[[u32; 3]], labels: &[[u32; 2]]) -> LabeledMesh {
+        let p = (0..5)
+            .map(|i| DVec3::new(i as f64, (i * i) as f64, 0.5 * i as f64))
+            .collect();
+        LabeledMesh::from_raw(p, tris, labels).unwrap()
+    }
+
+    #[test]
+    fn classify_relabels_with_the_outer_labels_on_the_right_sides() {
+        // Same orientation: t1 = [1 | 3] above, t2 = [3 | 2] below; region 3 between.
+        let m = mesh_of(&[[0, 1, 2], [0, 1, 2]], &[[1, 3], [3, 2]]);
+        let r = classify(&m, TriId::new(0), TriId::new(1));
+        assert_eq!(r, Some(Resolution::Relabel([Label::new(1), Label::new(2)])));
+        // Opposite orientation: t2 reversed carries [2 | 3].
+        let m = mesh_of(&[[0, 1, 2], [0, 2, 1]], &[[1, 3], [2, 3]]);
+        let r = classify(&m, TriId::new(0), TriId::new(1));
+        assert_eq!(r, Some(Resolution::Relabel([Label::new(1), Label::new(2)])));
+        // The inner region on t1's front: t1 = [3 | 1], t2 reversed = [3 | 2] → keep [2 | 1].
+        let m = mesh_of(&[[0, 1, 2], [1, 0, 2]], &[[3, 1], [3, 2]]);
+        let r = classify(&m, TriId::new(0), TriId::new(1));
+        assert_eq!(r, Some(Resolution::Relabel([Label::new(2), Label::new(1)])));
+    }
+
+    #[test]
+    fn classify_deletes_pairs_between_one_material_and_refuses_nonsense() {
+        let m = mesh_of(&[[0, 1, 2], [0, 1, 2]], &[[1, 3], [3, 1]]);
+        assert_eq!(
+            classify(&m, TriId::new(0), TriId::new(1)),
+            Some(Resolution::DeleteBoth)
+        );
+        // Both readings consistent ([3|1] and [1|3] with equal orientation): delete both.
+        let m = mesh_of(&[[0, 1, 2], [1, 2, 0]], &[[3, 1], [1, 3]]);
+        assert_eq!(
+            classify(&m, TriId::new(0), TriId::new(1)),
+            Some(Resolution::DeleteBoth)
+        );
+        // No shared label on facing sides: not a collapsed region.
+        let m = mesh_of(&[[0, 1, 2], [0, 1, 2]], &[[1, 2], [3, 4]]);
+        assert_eq!(classify(&m, TriId::new(0), TriId::new(1)), None);
+    }
+
+    #[test]
+    fn collapsed_triangles_and_their_orphan_vertices_go() {
+        // A lone collapsed triangle [3, 3, 4]: removed, and its vertices with it.
+        let mut m = mesh_of(
+            &[[0, 1, 2], [0, 2, 1], [3, 3, 4]],
+            &[[1, 3], [1, 3], [0, 1]],
+        );
+        let r = remove_degenerate(&mut m, &mut VertexAttributes::none(), &mut NoGuard);
+        assert_eq!(r.collapsed_removed, 1);
+        assert_eq!(r.vertices_removed, 5, "{r:?}");
+        assert_eq!(r.pairs_removed, 1);
+        assert_eq!(m.num_triangles(), 0);
+        assert_eq!(m.num_vertices(), 0);
+    }
+}

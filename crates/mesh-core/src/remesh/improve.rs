@@ -1,0 +1,611 @@
+//! [`improve`]: the mesh-improvement driver (El Topo §3.5–3.6, Los Topos §4.3, 2024 paper
+//! §8.5). It keeps edge lengths within `[min, max] × target` and triangles well shaped,
+//! and resolves the degeneracies the edits leave behind:
+//!
+//! ```text
+//! for sweep in 0..max_sweeps:
+//!     split_long_edges      longest first, butterfly placement with midpoint fallback
+//!     collapse_short_edges  shortest first, feature-aware
+//!     flip_edges            best improvement first, Delaunay criterion
+//!     smooth_vertices       null-space smoothing
+//!     remove_degenerate     T2 and collapsed triangles
+//!     separate_irregular    T1 vertex separation
+//!     pinch_singular        duplicate singular vertices
+//!     stop when the sweep made no topological edit (moves alone do not count)
+//! ```
+//!
+//! Each stage finds its candidates in parallel over one snapshot (edge lengths, flip gains,
+//! vertex classes) and commits them serially in a deterministic order, re-checking each
+//! candidate against the current mesh, so the result does not depend on the thread count
+//! and no edit scans the whole mesh (the guard aside).
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::corner::Side;
+use crate::ids::{CornerId, TriId, VertexId};
+use crate::mesh::LabeledMesh;
+
+use super::attributes::VertexAttributes;
+use super::collapse::{CollapseError, CollapseParams, CollapseScratch, collapse_edge_in};
+use super::degenerate::{DegenerateReport, remove_degenerate};
+use super::edit::{Edit, EditError};
+use super::features::{self, FeatureParams};
+use super::flip::{self, FlipCriterion, FlipError, FlipParams, flip_edge_in};
+use super::guard::EditGuard;
+use super::pinch::pinch_singular_vertices;
+use super::separate::{
+    AreaDecrease, SeparationParams, SeparationReport, SeparationStrength,
+    separate_irregular_vertices,
+};
+use super::smooth::{SmoothParams, commit_moves, propose_moves};
+use super::split::{SplitPlacement, SplitScratch, split_edge_in};
+
+/// Options of [`improve`]; every field has a documented default.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImproveParams {
+    /// Target edge length ℓ. Default `None`: the mean edge length of the mesh on entry.
+    pub target_edge_length: Option<f64>,
+    /// Edges shorter than `min_edge_factor · ℓ` are collapsed. Default 0.5 (El Topo).
+    pub min_edge_factor: f64,
+    /// Edges longer than `max_edge_factor · ℓ` are split. Default 1.5 (El Topo).
+    pub max_edge_factor: f64,
+    /// A collapse may not create an edge longer than `collapse_max_edge_factor · ℓ`.
+    /// Default 1.35: below `max_edge_factor`, so collapses never feed the next split.
+    pub collapse_max_edge_factor: f64,
+    /// Ω, the largest change of any label's volume one flip, collapse, smoothing move or
+    /// butterfly split may cause. Default `None`: `0.1·ℓ³` (El Topo §3.5.2).
+    pub max_volume_change: Option<f64>,
+    /// Bound on the sweeps. Default 8.
+    pub max_sweeps: usize,
+    /// Run edge splits. Default true.
+    pub split: bool,
+    /// Place split vertices by butterfly subdivision where the surface is smooth (else the
+    /// midpoint). Default true.
+    pub butterfly: bool,
+    /// Run edge collapses. Default true.
+    pub collapse: bool,
+    /// Run edge flips. Default true.
+    pub flip: bool,
+    /// Run null-space smoothing. Default true.
+    pub smooth: bool,
+    /// Run degenerate removal (T2). Default true.
+    pub remove_degenerate: bool,
+    /// Run vertex separation (T1). Default true.
+    pub separate: bool,
+    /// Pinch singular vertices. Default true.
+    pub pinch: bool,
+    /// Smoothing step (fraction of the projected Laplacian). Default 0.5.
+    pub smooth_step: f64,
+    /// Smoothing passes per sweep. Default 1.
+    pub smooth_passes: usize,
+    /// Flip criterion. Default [`FlipCriterion::Delaunay`].
+    pub flip_criterion: FlipCriterion,
+    /// Minimum flip improvement (see [`FlipCriterion`]). Default 0.01.
+    pub flip_min_improvement: f64,
+    /// Smallest allowed cosine between a triangle's normal before and after a collapse or
+    /// smoothing move. Default 0.5 (60°).
+    pub min_normal_cos: f64,
+    /// Vertex classification thresholds. Default [`FeatureParams::default`].
+    pub features: FeatureParams,
+    /// Vertex separation options. Default [`SeparationParams::default`].
+    pub separation: SeparationParams,
+}
+
+impl Default for ImproveParams {
+    fn default() -> Self {
+        Self {
+            target_edge_length: None,
+            min_edge_factor: 0.5,
+            max_edge_factor: 1.5,
+            collapse_max_edge_factor: 1.35,
+            max_volume_change: None,
+            max_sweeps: 8,
+            split: true,
+            butterfly: true,
+            collapse: true,
+            flip: true,
+            smooth: true,
+            remove_degenerate: true,
+            separate: true,
+            pinch: true,
+            smooth_step: 0.5,
+            smooth_passes: 1,
+            flip_criterion: FlipCriterion::Delaunay,
+            flip_min_improvement: 0.01,
+            min_normal_cos: 0.5,
+            features: FeatureParams::default(),
+            separation: SeparationParams::default(),
+        }
+    }
+}
+
+/// Outcome counts of one operation.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct OpCounts {
+    /// Edits committed.
+    pub done: usize,
+    /// Candidates refused by the operation's own checks (features, link condition,
+    /// inversion, volume, no longer applicable).
+    pub refused: usize,
+    /// Edits vetoed by the guard.
+    pub vetoed: usize,
+}
+
+/// What [`improve`] did.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct ImproveReport {
+    /// The target edge length used.
+    pub target_edge_length: f64,
+    /// The Ω used.
+    pub max_volume_change: f64,
+    /// Sweeps run.
+    pub sweeps: usize,
+    /// True when the last sweep made no topological edit (false: `max_sweeps` reached).
+    pub converged: bool,
+    /// Edge splits.
+    pub split: OpCounts,
+    /// Splits that wanted a butterfly position but used the midpoint.
+    pub split_midpoint_fallbacks: usize,
+    /// Edge collapses.
+    pub collapse: OpCounts,
+    /// Edge flips.
+    pub flip: OpCounts,
+    /// Smoothing moves.
+    pub smooth: OpCounts,
+    /// Degenerate removal (T2), summed over sweeps.
+    pub degenerate: DegenerateReport,
+    /// Vertex separations (T1), summed over sweeps.
+    pub separations: usize,
+    /// Separations vetoed by the guard.
+    pub separations_vetoed: usize,
+    /// Singular vertices pinched.
+    pub pinched: usize,
+    /// Σ over committed flips, collapses, smoothing moves and butterfly splits of the
+    /// largest label volume change each caused: a bound on every label's total change
+    /// from those operations (each term is ≤ Ω).
+    pub volume_change_bound: f64,
+    /// Distinct edges at the end.
+    pub edges: usize,
+    /// Fraction of them with length in `[min, max] × target`.
+    pub edges_in_range: f64,
+}
+
+/// Improves the mesh (see the module doc); T1 separation uses [`AreaDecrease`] as its
+/// strength (the surface-tension choice). Each edit goes through `guard`; `attrs` follow.
+pub fn improve(
+    mesh: &mut LabeledMesh,
+    params: &ImproveParams,
+    attrs: &mut VertexAttributes,
+    guard: &mut dyn EditGuard,
+) -> ImproveReport {
+    improve_with(mesh, params, attrs, guard, &AreaDecrease)
+}
+
+/// [`improve`] with a caller-chosen T1 separation strength (e.g. a velocity field's
+/// divergence, [`super::VelocityDivergence`]).
+pub fn improve_with(
+    mesh: &mut LabeledMesh,
+    params: &ImproveParams,
+    attrs: &mut VertexAttributes,
+    guard: &mut dyn EditGuard,
+    strength: &dyn SeparationStrength,
+) -> ImproveReport {
+    let mut run = Run::new(mesh, params);
+    for _ in 0..params.max_sweeps {
+        run.report.sweeps += 1;
+        let mut changed = 0;
+        if params.split {
+            changed += run.split_long_edges(mesh, attrs, guard);
+        }
+        if params.collapse {
+            changed += run.collapse_short_edges(mesh, attrs, guard);
+        }
+        if params.flip {
+            changed += run.flip_edges(mesh, attrs, guard);
+        }
+        if params.smooth {
+            run.smooth(mesh, attrs, guard);
+        }
+        if params.remove_degenerate {
+            let d = remove_degenerate(mesh, attrs, guard);
+            let edits = d.collapsed_removed + d.pairs_relabelled + d.pairs_removed;
+            run.touched(edits + d.vertices_removed);
+            changed += edits;
+            add_degenerate(&mut run.report.degenerate, &d);
+        }
+        if params.separate {
+            let s: SeparationReport =
+                separate_irregular_vertices(mesh, attrs, guard, &params.separation, strength);
+            run.touched(s.separations);
+            changed += s.separations;
+            run.report.separations += s.separations;
+            run.report.separations_vetoed += s.vetoed;
+        }
+        if params.pinch {
+            let p = pinch_singular_vertices(mesh, attrs, guard);
+            run.touched(p);
+            changed += p;
+            run.report.pinched += p;
+        }
+        if changed == 0 {
+            run.report.converged = true;
+            break;
+        }
+    }
+    let (lo, hi) = run.range();
+    let edges = run.edges(mesh);
+    let (count, inside) = (
+        edges.len(),
+        edges
+            .par_iter()
+            .filter(|e| e.length >= lo && e.length <= hi)
+            .count(),
+    );
+    run.report.edges = count;
+    run.report.edges_in_range = if count == 0 {
+        1.0
+    } else {
+        inside as f64 / count as f64
+    };
+    run.report
+}
+
+fn add_degenerate(sum: &mut DegenerateReport, d: &DegenerateReport) {
+    sum.collapsed_removed += d.collapsed_removed;
+    sum.pairs_relabelled += d.pairs_relabelled;
+    sum.pairs_removed += d.pairs_removed;
+    sum.vertices_removed += d.vertices_removed;
+    sum.vetoed += d.vetoed;
+    sum.unresolved += d.unresolved;
+}
+
+/// One distinct edge of a snapshot.
+#[derive(Clone, Copy, Debug)]
+struct EdgeItem {
+    a: VertexId,
+    b: VertexId,
+    length: f64,
+    /// A feature edge (≠ 2 triangles or differing label sets).
+    feature: bool,
+    /// A front corner opposite the edge (valid while the connectivity is unchanged).
+    corner: CornerId,
+}
+
+/// Every distinct edge once (from its lowest-id triangle), in triangle order, in parallel.
+fn edge_list(mesh: &LabeledMesh) -> Vec<EdgeItem> {
+    let alive = mesh.tri_alive_flags();
+    (0..mesh.triangle_capacity() as u32)
+        .into_par_iter()
+        .filter(|&t| alive[t as usize])
+        .flat_map_iter(|t| {
+            let t = TriId::new(t);
+            let tri = mesh.tri(t);
+            let degenerate = tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2];
+            (0..3).filter_map(move |k| {
+                if degenerate {
+                    return None;
+                }
+                let c = CornerId::of(t, Side::Front, k);
+                let star = features::edge_star(mesh, c);
+                (star.min_tri == t).then(|| {
+                    let [a, b] = mesh.corner_edge(c);
+                    let length = mesh.position(a).distance(mesh.position(b));
+                    EdgeItem {
+                        a,
+                        b,
+                        length,
+                        feature: star.is_feature(),
+                        corner: c,
+                    }
+                })
+            })
+        })
+        .collect()
+}
+
+/// Mean length of the distinct edges (0 for an empty mesh).
+pub fn mean_edge_length(mesh: &LabeledMesh) -> f64 {
+    mean_length(&edge_list(mesh))
+}
+
+fn mean_length(edges: &[EdgeItem]) -> f64 {
+    if edges.is_empty() {
+        return 0.0;
+    }
+    edges.par_iter().map(|e| e.length).sum::<f64>() / edges.len() as f64
+}
+
+/// Fraction of the distinct edges of `mesh` whose length lies in `[lo, hi]`, with the
+/// number of edges.
+pub fn edge_length_fraction(mesh: &LabeledMesh, lo: f64, hi: f64) -> (f64, usize) {
+    let edges = edge_list(mesh);
+    let inside = edges
+        .par_iter()
+        .filter(|e| e.length >= lo && e.length <= hi)
+        .count();
+    (
+        if edges.is_empty() {
+            1.0
+        } else {
+            inside as f64 / edges.len() as f64
+        },
+        edges.len(),
+    )
+}
+
+/// Working state of one [`improve`] call.
+struct Run<'p> {
+    params: &'p ImproveParams,
+    report: ImproveReport,
+    /// The distinct edges, rebuilt only after connectivity changed (lengths are refreshed
+    /// on every use, since smoothing moves vertices without changing connectivity).
+    edges: Vec<EdgeItem>,
+    edges_valid: bool,
+    split: SplitScratch,
+    collapse: CollapseScratch,
+    edit: Edit,
+    volumes: Vec<(crate::ids::Label, f64)>,
+}
+
+impl<'p> Run<'p> {
+    fn new(mesh: &LabeledMesh, params: &'p ImproveParams) -> Self {
+        let edges = edge_list(mesh);
+        let target = params
+            .target_edge_length
+            .unwrap_or_else(|| mean_length(&edges));
+        let omega = params
+            .max_volume_change
+            .unwrap_or(0.1 * target * target * target);
+        Run {
+            params,
+            report: ImproveReport {
+                target_edge_length: target,
+                max_volume_change: omega,
+                ..Default::default()
+            },
+            edges,
+            edges_valid: true,
+            split: SplitScratch::default(),
+            collapse: CollapseScratch::default(),
+            edit: Edit::default(),
+            volumes: Vec::new(),
+        }
+    }
+
+    fn range(&self) -> (f64, f64) {
+        let t = self.report.target_edge_length;
+        (
+            self.params.min_edge_factor * t,
+            self.params.max_edge_factor * t,
+        )
+    }
+
+    /// Records that `edits` connectivity-changing edits were applied.
+    fn touched(&mut self, edits: usize) {
+        if edits > 0 {
+            self.edges_valid = false;
+        }
+    }
+
+    /// The current distinct edges with current lengths.
+    fn edges(&mut self, mesh: &LabeledMesh) -> &[EdgeItem] {
+        if self.edges_valid {
+            self.edges
+                .par_iter_mut()
+                .for_each(|e| e.length = mesh.position(e.a).distance(mesh.position(e.b)));
+        } else {
+            self.edges = edge_list(mesh);
+            self.edges_valid = true;
+        }
+        &self.edges
+    }
+
+    fn current_length(mesh: &LabeledMesh, a: VertexId, b: VertexId) -> Option<f64> {
+        (mesh.is_vertex_alive(a) && mesh.is_vertex_alive(b) && flip::has_edge(mesh, a, b))
+            .then(|| mesh.position(a).distance(mesh.position(b)))
+    }
+
+    /// Splits edges longer than the maximum, longest first. Returns the number of splits.
+    fn split_long_edges(
+        &mut self,
+        mesh: &mut LabeledMesh,
+        attrs: &mut VertexAttributes,
+        guard: &mut dyn EditGuard,
+    ) -> usize {
+        let (_, hi) = self.range();
+        let mut candidates: Vec<EdgeItem> = self
+            .edges(mesh)
+            .par_iter()
+            .filter(|e| e.length > hi)
+            .copied()
+            .collect();
+        candidates.par_sort_unstable_by(|x, y| {
+            y.length
+                .total_cmp(&x.length)
+                .then((x.a, x.b).cmp(&(y.a, y.b)))
+        });
+        let placement = if self.params.butterfly {
+            SplitPlacement::Butterfly {
+                features: self.params.features,
+                max_volume_change: self.report.max_volume_change,
+            }
+        } else {
+            SplitPlacement::Midpoint
+        };
+        let counts = &mut self.report.split;
+        let before = counts.done;
+        for e in candidates {
+            if Self::current_length(mesh, e.a, e.b).is_none_or(|l| l <= hi) {
+                counts.refused += 1;
+                continue;
+            }
+            match split_edge_in(&mut self.split, mesh, attrs, guard, e.a, e.b, placement) {
+                Ok(s) => {
+                    counts.done += 1;
+                    self.report.split_midpoint_fallbacks += usize::from(s.fell_back);
+                    self.report.volume_change_bound += s.volume_change;
+                }
+                Err(EditError::Vetoed(_)) => counts.vetoed += 1,
+                Err(_) => counts.refused += 1,
+            }
+        }
+        let done = counts.done - before;
+        self.touched(done);
+        done
+    }
+
+    /// Collapses edges shorter than the minimum, shortest first. Returns the number done.
+    fn collapse_short_edges(
+        &mut self,
+        mesh: &mut LabeledMesh,
+        attrs: &mut VertexAttributes,
+        guard: &mut dyn EditGuard,
+    ) -> usize {
+        let (lo, _) = self.range();
+        let mut candidates: Vec<EdgeItem> = self
+            .edges(mesh)
+            .par_iter()
+            .filter(|e| e.length < lo)
+            .copied()
+            .collect();
+        candidates.par_sort_unstable_by(|x, y| {
+            x.length
+                .total_cmp(&y.length)
+                .then((x.a, x.b).cmp(&(y.a, y.b)))
+        });
+        let params = CollapseParams {
+            features: self.params.features,
+            max_volume_change: self.report.max_volume_change,
+            max_edge_length: self.params.collapse_max_edge_factor * self.report.target_edge_length,
+            min_normal_cos: self.params.min_normal_cos,
+            ..CollapseParams::default()
+        };
+        let counts = &mut self.report.collapse;
+        let before = counts.done;
+        for e in candidates {
+            if Self::current_length(mesh, e.a, e.b).is_none_or(|l| l >= lo) {
+                counts.refused += 1;
+                continue;
+            }
+            match collapse_edge_in(&mut self.collapse, mesh, attrs, guard, e.a, e.b, &params) {
+                Ok(dv) => {
+                    counts.done += 1;
+                    self.report.volume_change_bound += dv;
+                }
+                Err(CollapseError::Edit(EditError::Vetoed(_))) => counts.vetoed += 1,
+                Err(_) => counts.refused += 1,
+            }
+        }
+        let done = counts.done - before;
+        self.touched(done);
+        done
+    }
+
+    /// Flips every edge whose flip improves the criterion, best first. Returns flips done.
+    fn flip_edges(
+        &mut self,
+        mesh: &mut LabeledMesh,
+        attrs: &mut VertexAttributes,
+        guard: &mut dyn EditGuard,
+    ) -> usize {
+        let params = FlipParams {
+            criterion: self.params.flip_criterion,
+            min_improvement: self.params.flip_min_improvement,
+            max_volume_change: self.report.max_volume_change,
+        };
+        let snapshot: &LabeledMesh = mesh;
+        let mut candidates: Vec<(f64, VertexId, VertexId)> = self
+            .edges(snapshot)
+            .par_iter()
+            .filter(|e| !e.feature)
+            .filter_map(|e| {
+                let q = flip::quad_at(snapshot, e.corner).ok()?;
+                let gain = flip::flip_gain(snapshot, &q, params.criterion);
+                (gain > params.min_improvement).then_some((gain, e.a, e.b))
+            })
+            .collect();
+        candidates
+            .par_sort_unstable_by(|x, y| y.0.total_cmp(&x.0).then((x.1, x.2).cmp(&(y.1, y.2))));
+        let counts = &mut self.report.flip;
+        let before = counts.done;
+        for (_, a, b) in candidates {
+            match flip_edge_in(
+                &mut self.edit,
+                &mut self.volumes,
+                mesh,
+                attrs,
+                guard,
+                a,
+                b,
+                &params,
+            ) {
+                Ok(dv) => {
+                    counts.done += 1;
+                    self.report.volume_change_bound += dv;
+                }
+                Err(FlipError::Edit(EditError::Vetoed(_))) => counts.vetoed += 1,
+                Err(_) => counts.refused += 1,
+            }
+        }
+        let done = counts.done - before;
+        self.touched(done);
+        done
+    }
+
+    /// Null-space smoothing passes; feature-curve vertices come from the edge list.
+    fn smooth(
+        &mut self,
+        mesh: &mut LabeledMesh,
+        attrs: &mut VertexAttributes,
+        guard: &mut dyn EditGuard,
+    ) {
+        let params = SmoothParams {
+            step: self.params.smooth_step,
+            features: self.params.features,
+            max_volume_change: self.report.max_volume_change,
+            min_normal_cos: self.params.min_normal_cos,
+            ..SmoothParams::default()
+        };
+        let mut counts = vec![0u32; mesh.vertex_capacity()];
+        for e in self.edges(mesh).iter().filter(|e| e.feature) {
+            counts[e.a.idx()] += 1;
+            counts[e.b.idx()] += 1;
+        }
+        for _ in 0..self.params.smooth_passes {
+            let proposals = propose_moves(mesh, &params, Some(&counts));
+            let out = commit_moves(mesh, attrs, guard, &params, &proposals);
+            self.report.smooth.done += out.moved;
+            self.report.smooth.refused += out.refused;
+            self.report.smooth.vetoed += out.vetoed;
+            self.report.volume_change_bound += out.volume_change;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::remesh::guard::NoGuard;
+
+    #[test]
+    fn edge_list_counts_each_edge_once() {
+        let m = crate::remesh::split::tests::triple_edge_scene();
+        // 5 vertices, 7 triangles: edges 0-1,0-2,0-3,0-4,1-2,1-3,1-4,2-3,3-4 = 9.
+        assert_eq!(edge_list(&m).len(), 9);
+    }
+
+    #[test]
+    fn improve_on_a_coarse_box_refines_to_target() {
+        let mut m = crate::remesh::collapse::tests::double_box();
+        let params = ImproveParams {
+            target_edge_length: Some(0.3),
+            ..ImproveParams::default()
+        };
+        let r = improve(&mut m, &params, &mut VertexAttributes::none(), &mut NoGuard);
+        assert!(r.split.done > 0);
+        assert!(r.edges_in_range > 0.8, "{r:?}");
+        let regions = m.regions();
+        assert!(regions.shells.iter().all(|s| s.closed && s.consistent));
+    }
+}

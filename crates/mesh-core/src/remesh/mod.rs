@@ -1,0 +1,44 @@
+//! Shared mesh improvement and local topology operations (issue 3), written once for both
+//! backends. Every operation builds an atomic [`Edit`] that an [`EditGuard`] may veto.
+//!
+//! - [`edit`]: the edit representation and [`apply_edit`];
+//! - [`guard`]: [`EditGuard`], [`NoGuard`], [`StaticIntersectionGuard`];
+//! - [`attributes`]: per-vertex data carried through edits.
+//! - [`region_graph`]: the region graph of a vertex; regular ⇔ complete (Los Topos §5);
+//! - [`separate`]: vertex separation, T1 (Los Topos §5, Algorithm 2);
+//! - [`degenerate`]: zero-volume regions and collapsed triangles, T2 (Los Topos §6);
+//! - [`pinch`]: duplicating singular vertices (El Topo §3.6).
+//! - [`features`]: vertex classification (quadric tensor, feature curves) and null space;
+//! - [`split`], [`flip`], [`collapse`], [`smooth`]: the mesh-improvement operations
+//!   (El Topo §3.5–3.6);
+//! - [`improve`]: the driver that sweeps them to keep edge lengths in range.
+
+pub mod attributes;
+pub mod collapse;
+pub mod degenerate;
+pub mod edit;
+pub mod features;
+pub mod flip;
+pub mod guard;
+pub mod improve;
+pub mod pinch;
+pub mod region_graph;
+pub mod separate;
+pub mod smooth;
+pub mod split;
+
+pub use attributes::{Blend, VertexAttributes};
+pub use edit::{Applied, Edit, EditError, NewVertex, VertexMove, VertexRef, apply_edit};
+pub use guard::{EditGuard, NoGuard, StaticIntersectionGuard};
+pub use degenerate::{DegenerateReport, remove_degenerate};
+pub use pinch::pinch_singular_vertices;
+pub use region_graph::{RegionGraph, irregular_vertices};
+pub use separate::{
+    AreaDecrease, SeparationParams, SeparationReport, SeparationStrength, VelocityDivergence, separate_irregular_vertices,
+};
+pub use collapse::{CollapseError, CollapseParams, CollapseRefusal, collapse_edge};
+pub use features::{FeatureParams, VertexKind, classify_vertex, classify_vertices};
+pub use flip::{FlipCriterion, FlipError, FlipParams, FlipRefusal, flip_edge};
+pub use improve::{ImproveParams, ImproveReport, OpCounts, improve, improve_with};
+pub use smooth::{SmoothOutcome, SmoothParams, smooth_vertices};
+pub use split::{SplitPlacement, split_edge};

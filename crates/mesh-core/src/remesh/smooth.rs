@@ -1,0 +1,375 @@
+//! Null-space smoothing (El Topo §3.6.1, after Jiao 2007).
+//!
+//! Each vertex is pulled towards the area-weighted centroid of its incident triangles'
+//! centroids (an area-weighted Laplacian), but only within the null space of its quadric
+//! tensor ([`VertexKind::project`]): tangentially on a smooth patch, along the ridge on a
+//! ridge, and not at all at corners or on feature curves. Edge lengths even out without
+//! shrinking the surface or rounding its features.
+//!
+//! Displacements are computed for all vertices in parallel from one snapshot (Jacobi
+//! style); each move is then committed serially as its own [`Edit`], so the guard checks
+//! every vertex against the mesh as it is at that moment, and each move is re-checked for
+//! inverted triangles, excessive normal rotation and volume change before it is offered.
+//! (A single batched edit would be cheaper to commit but would make the guard's verdict
+//! all-or-nothing: one blocked vertex would freeze the whole pass.)
+
+use glam::DVec3;
+use nalgebra::Matrix3;
+use rayon::prelude::*;
+
+use crate::geometry;
+use crate::ids::{Label, VertexId};
+use crate::mesh::LabeledMesh;
+
+use super::attributes::VertexAttributes;
+use super::edit::{Edit, EditError, VertexMove, apply_edit};
+use super::features::{self, FeatureParams, VertexKind};
+use super::guard::EditGuard;
+
+/// Parameters of [`smooth_vertices`].
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct SmoothParams {
+    /// Fraction of the projected Laplacian displacement applied per pass. Default 0.5: the
+    /// Jacobi update of neighbours at full step can overshoot; half a step converges
+    /// monotonically on regular patches.
+    pub step: f64,
+    /// Classification thresholds.
+    pub features: FeatureParams,
+    /// Largest allowed change of any label's volume per move (Ω). Default: no limit.
+    pub max_volume_change: f64,
+    /// Smallest allowed cosine between an incident triangle's normal before and after the
+    /// move. Default 0.5 (60°).
+    pub min_normal_cos: f64,
+    /// Moves shorter than this fraction of the vertex's local scale (√ of its mean incident
+    /// triangle area) are skipped as converged. Default 1e-3.
+    pub min_relative_move: f64,
+}
+
+impl Default for SmoothParams {
+    fn default() -> Self {
+        Self {
+            step: 0.5,
+            features: FeatureParams::default(),
+            max_volume_change: f64::INFINITY,
+            min_normal_cos: 0.5,
+            min_relative_move: 1e-3,
+        }
+    }
+}
+
+/// What a smoothing pass did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct SmoothOutcome {
+    /// Vertices moved.
+    pub moved: usize,
+    /// Moves refused by the local checks (inversion, rotation, volume).
+    pub refused: usize,
+    /// Moves vetoed by the guard.
+    pub vetoed: usize,
+    /// Sum over committed moves of the largest label volume change of each.
+    pub volume_change: f64,
+}
+
+/// The unprojected area-weighted Laplacian of `v`: `Σ areaᵢ (centroidᵢ − v) / Σ areaᵢ`,
+/// with the local scale `√(Σ areaᵢ / n)`. `None` for isolated or zero-area vertices.
+pub fn laplacian_displacement(mesh: &LabeledMesh, v: VertexId) -> Option<(DVec3, f64)> {
+    let p = mesh.position(v);
+    let (mut sum, mut area, mut n) = (DVec3::ZERO, 0.0, 0usize);
+    for t in mesh.vertex_triangles(v) {
+        let q = mesh.tri_positions(t);
+        let w = geometry::triangle_area(&q);
+        sum += w * ((q[0] + q[1] + q[2]) / 3.0 - p);
+        area += w;
+        n += 1;
+    }
+    (area > 0.0 && area.is_finite()).then(|| (sum / area, (area / n as f64).sqrt()))
+}
+
+/// The null-space smoothing displacement of `v` for the given kind (zero when it must stay).
+pub fn smoothing_displacement(mesh: &LabeledMesh, v: VertexId, kind: &VertexKind) -> DVec3 {
+    match laplacian_displacement(mesh, v) {
+        Some((d, _)) => kind.project(d),
+        None => DVec3::ZERO,
+    }
+}
+
+/// One smoothing pass over all vertices (see the module doc), in increasing vertex order.
+pub fn smooth_vertices(
+    mesh: &mut LabeledMesh,
+    attrs: &mut VertexAttributes,
+    guard: &mut dyn EditGuard,
+    params: &SmoothParams,
+) -> SmoothOutcome {
+    let proposals = propose_moves(mesh, params, None);
+    commit_moves(mesh, attrs, guard, params, &proposals)
+}
+
+/// Commits proposed moves one edit at a time, in the given order.
+pub(crate) fn commit_moves(
+    mesh: &mut LabeledMesh,
+    attrs: &mut VertexAttributes,
+    guard: &mut dyn EditGuard,
+    params: &SmoothParams,
+    proposals: &[(VertexId, DVec3)],
+) -> SmoothOutcome {
+    let mut out = SmoothOutcome::default();
+    let mut edit = Edit::default();
+    let mut volumes = Vec::new();
+    for &(v, d) in proposals {
+        match smooth_vertex_in(&mut edit, &mut volumes, mesh, attrs, guard, v, d, params) {
+            Ok(dv) => {
+                out.moved += 1;
+                out.volume_change += dv;
+            }
+            Err(SmoothError::Refused) => out.refused += 1,
+            Err(SmoothError::Edit(EditError::Vetoed(_))) => out.vetoed += 1,
+            Err(SmoothError::Edit(_)) => out.refused += 1,
+        }
+    }
+    out
+}
+
+/// Displacements `(v, step · projected Laplacian)` worth applying, in increasing vertex
+/// order, computed in parallel. `feature_edges[v]`, when given, is the number of feature
+/// edges at `v` (computed once per sweep by the caller); only vertices with none can move,
+/// so the per-vertex edge walk of [`features::classify_vertex`] is skipped.
+pub(crate) fn propose_moves(
+    mesh: &LabeledMesh,
+    params: &SmoothParams,
+    feature_edges: Option<&[u32]>,
+) -> Vec<(VertexId, DVec3)> {
+    (0..mesh.vertex_capacity() as u32)
+        .into_par_iter()
+        .filter_map(|i| {
+            let v = VertexId::new(i);
+            if !mesh.is_vertex_alive(v) {
+                return None;
+            }
+            let on_curve = match feature_edges {
+                Some(counts) => counts.get(v.idx()).is_none_or(|&c| c > 0),
+                None => features::classify_vertex(mesh, v, &params.features).on_curve(),
+            };
+            if on_curve {
+                return None;
+            }
+            let (kind, d, scale) = vertex_frame(mesh, v, &params.features)?;
+            let d = kind.project(d) * params.step;
+            (d.length() > params.min_relative_move * scale && d.is_finite()).then_some((v, d))
+        })
+        .collect()
+}
+
+/// The quadric classification, the unprojected area-weighted Laplacian and the local scale
+/// of `v` in one walk over its triangles (see [`features::classify_vertex`] and
+/// [`laplacian_displacement`]); the caller has ruled out feature edges at `v`.
+fn vertex_frame(
+    mesh: &LabeledMesh,
+    v: VertexId,
+    params: &FeatureParams,
+) -> Option<(VertexKind, DVec3, f64)> {
+    let p = mesh.position(v);
+    let (mut tensor, mut normals, mut sum, mut area, mut n) =
+        (Matrix3::zeros(), DVec3::ZERO, DVec3::ZERO, 0.0, 0usize);
+    for t in mesh.vertex_triangles(v) {
+        let q = mesh.tri_positions(t);
+        let an = geometry::area_normal(&q);
+        let w = an.length();
+        features::add_to_quadric(&mut tensor, an);
+        normals += an;
+        sum += w * ((q[0] + q[1] + q[2]) / 3.0 - p);
+        area += w;
+        n += 1;
+    }
+    let kind = features::classify_with_hint(tensor, normals, params);
+    (area > 0.0 && area.is_finite()).then(|| (kind, sum / area, (area / n as f64).sqrt()))
+}
+
+/// Why one smoothing move was not made.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+enum SmoothError {
+    #[error("refused by the local checks")]
+    Refused,
+    #[error(transparent)]
+    Edit(#[from] EditError),
+}
+
+/// Moves `v` by `d` if no incident triangle inverts or rotates too far and no label volume
+/// changes by more than Ω; returns the largest label volume change.
+#[allow(clippy::too_many_arguments)]
+fn smooth_vertex_in(
+    edit: &mut Edit,
+    volumes: &mut Vec<(Label, f64)>,
+    mesh: &mut LabeledMesh,
+    attrs: &mut VertexAttributes,
+    guard: &mut dyn EditGuard,
+    v: VertexId,
+    d: DVec3,
+    params: &SmoothParams,
+) -> Result<f64, SmoothError> {
+    let end = mesh.position(v) + d;
+    for t in mesh.vertex_triangles(v) {
+        let old = mesh.tri_positions(t);
+        let new = mesh
+            .tri(t)
+            .map(|w| if w == v { end } else { mesh.position(w) });
+        if !features::normals_agree(&old, &new)
+            || features::normal_cos(&old, &new).is_none_or(|c| c < params.min_normal_cos)
+        {
+            return Err(SmoothError::Refused);
+        }
+    }
+    edit.clear();
+    edit.moves.push(VertexMove {
+        vertex: v,
+        end,
+        blend: None,
+    });
+    let dv = features::max_label_volume_change(mesh, edit, volumes);
+    if dv > params.max_volume_change {
+        return Err(SmoothError::Refused);
+    }
+    apply_edit(mesh, attrs, guard, edit)?;
+    Ok(dv)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::remesh::collapse::tests::double_box;
+    use crate::remesh::guard::NoGuard;
+
+    /// A closed "pillow": a flat square grid on top (z = 0, n × n cells) over an apex.
+    fn pillow(n: usize, jitter: f64) -> LabeledMesh {
+        let mut p = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                let interior = i > 0 && i < n && j > 0 && j < n;
+                let (dx, dy) = if interior {
+                    // Deterministic jitter, enough to make the grid uneven.
+                    (
+                        jitter * (((i * 7 + j * 3) % 5) as f64 - 2.0),
+                        jitter * (((i * 2 + j * 5) % 5) as f64 - 2.0),
+                    )
+                } else {
+                    (0.0, 0.0)
+                };
+                p.push(DVec3::new(i as f64 + dx, j as f64 + dy, 0.0));
+            }
+        }
+        let apex = p.len() as u32;
+        p.push(DVec3::new(n as f64 / 2.0, n as f64 / 2.0, -(n as f64)));
+        let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+        let mut tris = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                tris.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                tris.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        // Boundary ring, counter-clockwise seen from above, fanned to the apex below.
+        let mut ring = Vec::new();
+        ring.extend((0..n).map(|i| id(i, 0)));
+        ring.extend((0..n).map(|j| id(n, j)));
+        ring.extend((0..n).map(|i| id(n - i, n)));
+        ring.extend((0..n).map(|j| id(0, n - j)));
+        for k in 0..ring.len() {
+            tris.push([ring[(k + 1) % ring.len()], ring[k], apex]);
+        }
+        let labels = vec![[0, 1]; tris.len()];
+        LabeledMesh::from_raw(p, &tris, &labels).expect("valid arrays")
+    }
+
+    #[test]
+    fn smoothing_stays_in_the_plane_and_keeps_volume() {
+        let mut m = pillow(6, 0.08);
+        let vol_before = geometry::label_volumes(&m);
+        let params = SmoothParams::default();
+        let mut total = 0;
+        for _ in 0..5 {
+            total +=
+                smooth_vertices(&mut m, &mut VertexAttributes::none(), &mut NoGuard, &params).moved;
+        }
+        assert!(total > 0);
+        // The top grid (vertices 0..49) is planar: tangential and ridge motion keep it so.
+        for v in m.vertices().filter(|v| v.idx() < 49) {
+            assert!(
+                m.position(v).z.abs() < 1e-12,
+                "top vertex {v} left the plane"
+            );
+        }
+        let vol_after = geometry::label_volumes(&m);
+        for (l, v) in &vol_before {
+            assert!((vol_after[l] - v).abs() < 1e-9);
+        }
+    }
+
+    /// Relative standard deviation of the triangle edge lengths.
+    fn edge_spread(m: &LabeledMesh) -> f64 {
+        let lens: Vec<f64> = m
+            .triangles()
+            .flat_map(|t| {
+                let p = m.tri_positions(t);
+                [
+                    p[0].distance(p[1]),
+                    p[1].distance(p[2]),
+                    p[2].distance(p[0]),
+                ]
+            })
+            .collect();
+        let mean = lens.iter().sum::<f64>() / lens.len() as f64;
+        (lens.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / lens.len() as f64).sqrt() / mean
+    }
+
+    #[test]
+    fn smoothing_evens_a_jittered_sphere_without_leaving_it() {
+        use rand::{Rng, SeedableRng};
+        let mut m =
+            crate::generators::icosphere(3, DVec3::ZERO, 1.0, [Label::new(0), Label::new(1)])
+                .expect("sphere");
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        for v in m.vertices().collect::<Vec<_>>() {
+            let p = m.position(v);
+            let jitter = DVec3::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+            );
+            m.set_position(v, (p + 0.04 * jitter).normalize());
+        }
+        let before = edge_spread(&m);
+        for _ in 0..6 {
+            smooth_vertices(
+                &mut m,
+                &mut VertexAttributes::none(),
+                &mut NoGuard,
+                &SmoothParams::default(),
+            );
+        }
+        let after = edge_spread(&m);
+        assert!(
+            after < 0.8 * before,
+            "edge length spread {before} -> {after}"
+        );
+        let off = m
+            .vertices()
+            .map(|v| (m.position(v).length() - 1.0).abs())
+            .fold(0.0, f64::max);
+        assert!(off < 5e-3, "left the sphere by {off}");
+    }
+
+    #[test]
+    fn curve_and_corner_vertices_stay() {
+        let mut m = double_box();
+        // Jitter a smooth (face-interior) vertex? The boxes have none: every vertex is a
+        // corner or on the triple square, so nothing may move.
+        let before = m.to_raw();
+        let out = smooth_vertices(
+            &mut m,
+            &mut VertexAttributes::none(),
+            &mut NoGuard,
+            &SmoothParams::default(),
+        );
+        assert_eq!(out.moved, 0);
+        assert_eq!(m.to_raw(), before);
+    }
+}
