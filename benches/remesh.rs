@@ -12,7 +12,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use surftrack::mesh_core::LabeledMesh;
 use surftrack::mesh_core::generators::random_spheres;
-use surftrack::mesh_core::remesh::{ImproveParams, NoGuard, VertexAttributes, improve};
+use surftrack::mesh_core::remesh::{EditGuard, ImproveParams, NoGuard, StaticIntersectionGuard, VertexAttributes, improve};
 
 /// 40 spheres of 5120 triangles each, every vertex pushed radially by up to ±30 % of the
 /// local edge length so that splits, collapses, flips and smoothing all have work.
@@ -35,16 +35,22 @@ fn bench_improve(c: &mut Criterion) {
     group.sample_size(10).measurement_time(Duration::from_secs(20));
     group.throughput(Throughput::Elements(mesh.num_triangles() as u64));
     let params = ImproveParams::default();
-    group.bench_function(format!("noisy_spheres_{}k_triangles", mesh.num_triangles() / 1000), |b| {
-        b.iter_batched(
-            || mesh.clone(),
-            |mut m| {
-                let mut attrs = VertexAttributes::none();
-                black_box(improve(&mut m, &params, &mut attrs, &mut NoGuard))
-            },
-            BatchSize::LargeInput,
-        )
-    });
+    let guards: [(&str, fn() -> Box<dyn EditGuard>); 2] = [
+        ("no_guard", || Box::new(NoGuard)),
+        ("static_intersection_guard", || Box::new(StaticIntersectionGuard::new())),
+    ];
+    for (name, make_guard) in guards {
+        group.bench_function(format!("{name}_noisy_spheres_{}k_triangles", mesh.num_triangles() / 1000), |b| {
+            b.iter_batched(
+                || (mesh.clone(), make_guard()),
+                |(mut m, mut guard)| {
+                    let mut attrs = VertexAttributes::none();
+                    black_box(improve(&mut m, &params, &mut attrs, guard.as_mut()))
+                },
+                BatchSize::LargeInput,
+            )
+        });
+    }
     group.finish();
 }
 

@@ -83,7 +83,7 @@ fn non_manifold_edges_pair_by_wedge() {
     let regions = mesh.regions();
     assert_eq!(regions.shells.len(), 3);
     let mut vols: Vec<(u32, f64)> = regions.shells.iter().map(|s| (s.label.raw(), s.volume)).collect();
-    vols.sort_by(|a, b| a.0.cmp(&b.0));
+    vols.sort_by_key(|v| v.0);
     assert_eq!(vols[1].0, 1);
     assert!((vols[1].1 - 1.0 / 6.0).abs() < 1e-12, "{vols:?}");
     assert!((vols[2].1 - 1.0 / 6.0).abs() < 1e-12, "{vols:?}");

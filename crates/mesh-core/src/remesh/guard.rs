@@ -6,6 +6,8 @@
 //! pseudo-motion with exact CCD. [`StaticIntersectionGuard`] ships here: it rejects edits
 //! whose end state would make a new or moved triangle intersect the rest of the mesh.
 
+use std::collections::HashMap;
+
 use glam::DVec3;
 
 use crate::broadphase::{Aabb, Bvh};
@@ -47,22 +49,94 @@ type Keyed = [(u32, DVec3); 3];
 /// the sweep: on an intersection-free mesh with small edits (the remeshing case) that keeps
 /// the mesh intersection-free; the collision backend adds the sweep test.
 ///
-/// Candidates come from a BVH over the triangles' boxes, built lazily, plus a list of the
-/// triangles changed since it was built (whose boxes in the BVH may be stale); the BVH is
-/// rebuilt when that list grows past a fraction of the mesh. So a check costs
-/// O(log n + changes since the last rebuild). The guard learns of changes through
+/// Candidates come from a BVH over the triangles' boxes, built lazily, plus a hash grid of
+/// the triangles changed since it was built (whose boxes in the BVH may be stale); the BVH
+/// is rebuilt when the changes grow past a fraction of the mesh. So a check costs
+/// O(log n) plus the changes near it. The guard learns of changes through
 /// [`EditGuard::committed`]: if the mesh is changed any other way, call
 /// [`StaticIntersectionGuard::reset`].
 #[derive(Debug, Default)]
 pub struct StaticIntersectionGuard {
     index: Option<Bvh>,
-    /// Triangle slots changed since the BVH was built.
-    dirty: Vec<TriId>,
-    is_dirty: Vec<bool>,
+    /// Triangles changed since the BVH was built, at their current boxes.
+    dirty: DirtyGrid,
     /// Scratch buffers, kept to avoid allocation per check.
     moved: Vec<TriId>,
     changed: Vec<Keyed>,
     candidates: Vec<TriId>,
+}
+
+/// Triangles changed since the BVH was built, bucketed on a uniform grid (cell ≈ a
+/// triangle's size) so that a check looks only at the changes near it. A triangle that
+/// changes again is inserted again at its new box; stale entries only cost a box test.
+#[derive(Debug, Default)]
+struct DirtyGrid {
+    cell: f64,
+    buckets: HashMap<[i64; 3], Vec<TriId>>,
+    /// Triangles too large for a few cells, checked against every query.
+    oversize: Vec<TriId>,
+    inserts: usize,
+}
+
+/// A triangle box spanning more cells than this goes to the oversize list.
+const MAX_CELLS_PER_BOX: i64 = 27;
+
+impl DirtyGrid {
+    fn reset(&mut self, cell: f64) {
+        self.cell = if cell.is_finite() && cell > 0.0 { cell } else { 1.0 };
+        self.buckets.clear();
+        self.oversize.clear();
+        self.inserts = 0;
+    }
+
+    /// Integer cell range of a box, or `None` if it is too large (or not finite).
+    fn cells(&self, b: &Aabb) -> Option<([i64; 3], [i64; 3])> {
+        let lo = (b.min / self.cell).floor();
+        let hi = (b.max / self.cell).floor();
+        if !lo.is_finite() || !hi.is_finite() {
+            return None;
+        }
+        let span = hi - lo + 1.0;
+        if span.x * span.y * span.z > MAX_CELLS_PER_BOX as f64 {
+            return None;
+        }
+        Some(([lo.x as i64, lo.y as i64, lo.z as i64], [hi.x as i64, hi.y as i64, hi.z as i64]))
+    }
+
+    fn insert(&mut self, t: TriId, b: &Aabb) {
+        self.inserts += 1;
+        match self.cells(b) {
+            Some((lo, hi)) => {
+                for x in lo[0]..=hi[0] {
+                    for y in lo[1]..=hi[1] {
+                        for z in lo[2]..=hi[2] {
+                            self.buckets.entry([x, y, z]).or_default().push(t);
+                        }
+                    }
+                }
+            }
+            None => self.oversize.push(t),
+        }
+    }
+
+    fn query(&self, b: &Aabb, out: &mut Vec<TriId>) {
+        out.extend_from_slice(&self.oversize);
+        match self.cells(b) {
+            Some((lo, hi)) => {
+                for x in lo[0]..=hi[0] {
+                    for y in lo[1]..=hi[1] {
+                        for z in lo[2]..=hi[2] {
+                            if let Some(bucket) = self.buckets.get(&[x, y, z]) {
+                                out.extend_from_slice(bucket);
+                            }
+                        }
+                    }
+                }
+            }
+            // A query box too large for the grid: every changed triangle is a candidate.
+            None => out.extend(self.buckets.values().flatten()),
+        }
+    }
 }
 
 impl StaticIntersectionGuard {
@@ -74,16 +148,14 @@ impl StaticIntersectionGuard {
     /// Forgets the index, e.g. after the mesh was changed outside `apply_edit`.
     pub fn reset(&mut self) {
         self.index = None;
-        self.dirty.clear();
-        self.is_dirty.clear();
+        self.dirty.reset(1.0);
     }
 
-    /// Builds the BVH if there is none, or if enough has changed since that rechecking the
-    /// dirty list would cost more than rebuilding.
+    /// Builds the BVH if there is none, or if so much has changed since that rebuilding is
+    /// cheaper than carrying the changes.
     fn refresh(&mut self, mesh: &LabeledMesh) {
         let capacity = mesh.triangle_capacity();
-        let stale = self.dirty.len() > 64 + capacity / 32 || self.is_dirty.len() > capacity;
-        if self.index.is_some() && !stale {
+        if self.index.is_some() && self.dirty.inserts <= 256 + capacity / 8 {
             return;
         }
         let boxes: Vec<Aabb> = (0..capacity)
@@ -96,25 +168,28 @@ impl StaticIntersectionGuard {
                 }
             })
             .collect();
+        let live = mesh.num_triangles().max(1) as f64;
+        let mean_extent = boxes
+            .iter()
+            .filter(|b| !b.is_empty())
+            .map(|b| (b.max - b.min).max_element())
+            .filter(|e| e.is_finite())
+            .sum::<f64>()
+            / live;
+        self.dirty.reset(mean_extent * 2.0);
         // A build only fails for more boxes than ids, which a mesh cannot have; without an
-        // index every triangle is treated as dirty, which is slow but still exact.
+        // index every triangle goes to the changed set, which is slow but still exact.
         self.index = Bvh::build(&boxes).ok();
-        self.dirty.clear();
-        self.is_dirty.clear();
-        self.is_dirty.resize(capacity, false);
         if self.index.is_none() {
-            self.dirty.extend(mesh.triangles());
-            self.is_dirty.fill(true);
+            for t in mesh.triangles() {
+                self.dirty.oversize.push(t);
+            }
         }
     }
 
-    fn mark_dirty(&mut self, t: TriId) {
-        if t.idx() >= self.is_dirty.len() {
-            self.is_dirty.resize(t.idx() + 1, false);
-        }
-        if !self.is_dirty[t.idx()] {
-            self.is_dirty[t.idx()] = true;
-            self.dirty.push(t);
+    fn mark_dirty(&mut self, mesh: &LabeledMesh, t: TriId) {
+        if mesh.is_triangle_alive(t) {
+            self.dirty.insert(t, &Aabb::from_points(&mesh.tri_positions(t)));
         }
     }
 }
@@ -153,7 +228,8 @@ impl EditGuard for StaticIntersectionGuard {
                 let candidates = &mut self.candidates;
                 index.query(&bounds, 0.0, |id| candidates.push(TriId::new(id)));
             }
-            for &t in self.candidates.iter().chain(self.dirty.iter()) {
+            self.dirty.query(&bounds, &mut self.candidates);
+            for &t in &self.candidates {
                 if !mesh.is_triangle_alive(t) || removed(t) || self.moved.contains(&t) {
                     continue;
                 }
@@ -176,12 +252,11 @@ impl EditGuard for StaticIntersectionGuard {
             return;
         }
         for &t in &applied.triangles {
-            self.mark_dirty(t);
+            self.mark_dirty(mesh, t);
         }
         for m in &edit.moves {
-            let around: Vec<TriId> = mesh.vertex_triangles(m.vertex).collect();
-            for t in around {
-                self.mark_dirty(t);
+            for t in mesh.vertex_triangles(m.vertex) {
+                self.mark_dirty(mesh, t);
             }
         }
     }
