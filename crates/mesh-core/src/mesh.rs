@@ -105,6 +105,20 @@ impl LabeledMesh {
 
     /// Builds a mesh from typed arrays whose indices are known to be in range.
     fn from_parts(positions: Vec<DVec3>, tris: Vec<[VertexId; 3]>, labels: Vec<[Label; 2]>) -> Self {
+        let opposite = vec![None; tris.len() * 6];
+        let mut mesh = Self::dense(positions, tris, labels, opposite);
+        mesh.rebuild_opposites();
+        mesh
+    }
+
+    /// A mesh with every slot live and no free lists, from dense arrays and a given
+    /// opposite table; the vertex rings are rebuilt.
+    fn dense(
+        positions: Vec<DVec3>,
+        tris: Vec<[VertexId; 3]>,
+        labels: Vec<[Label; 2]>,
+        opposite: Vec<Option<CornerId>>,
+    ) -> Self {
         let nv = positions.len();
         let nt = tris.len();
         let mut mesh = LabeledMesh {
@@ -118,13 +132,12 @@ impl LabeledMesh {
             tri_alive: vec![true; nt],
             free_tris: Vec::new(),
             live_tris: nt,
-            opposite: vec![None; nt * 6],
+            opposite,
             ring_next: vec![None; nt * 3],
             ring_prev: vec![None; nt * 3],
             scratch: Vec::new(),
         };
         mesh.rebuild_rings();
-        mesh.rebuild_opposites();
         mesh
     }
 
@@ -521,25 +534,7 @@ impl LabeledMesh {
                 });
             }
         }
-        let nv = positions.len();
-        let nt = tris.len();
-        *self = LabeledMesh {
-            positions: IdVec::from_vec(positions),
-            vertex_alive: vec![true; nv],
-            ring_head: IdVec::from_vec(vec![None; nv]),
-            free_vertices: Vec::new(),
-            live_vertices: nv,
-            tris: IdVec::from_vec(tris),
-            labels: IdVec::from_vec(labels),
-            tri_alive: vec![true; nt],
-            free_tris: Vec::new(),
-            live_tris: nt,
-            opposite,
-            ring_next: vec![None; nt * 3],
-            ring_prev: vec![None; nt * 3],
-            scratch: std::mem::take(&mut self.scratch),
-        };
-        self.rebuild_rings();
+        *self = Self::dense(positions, tris, labels, opposite);
         Compaction { vertex_map, tri_map }
     }
 
