@@ -49,8 +49,11 @@ pub struct AxisCrossing {
 /// (δu, δv being ε-powers), so on a tie the sign is that of the dominant coefficient,
 /// then of the other one. Both coefficients depend only on the edge: the neighbour across
 /// the edge sees them negated, which is what makes a shared edge count once.
+///
+/// Public so that other exact tests on the grid (e.g. whether a segment pierces a grid
+/// face) resolve ties in the same perturbed world as the line crossings.
 #[inline]
-fn orient2d_sos(a: DVec2, b: DVec2, q: DVec2, u_dominant: bool) -> Sign {
+pub fn orient2d_sos(a: DVec2, b: DVec2, q: DVec2, u_dominant: bool) -> Sign {
     orient2d(a, b, q).or_else(|| {
         let du = Sign::of_difference(a.y, b.y); // sign of −(b.y − a.y)
         let dv = Sign::of_difference(b.x, a.x); // sign of (b.x − a.x)

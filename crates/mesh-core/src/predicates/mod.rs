@@ -45,7 +45,7 @@ mod exact_ref;
 
 pub use crossing::{
     AxisCrossing, compare_crossing_with_point, cross_axis_line_triangle,
-    cross_axis_segment_triangle,
+    cross_axis_segment_triangle, orient2d_sos,
 };
 pub use orient::{Axis, Sign, orient2d, orient2d_axis, orient3d};
 pub use tri_tri::{
