@@ -7,12 +7,30 @@ use mesh_core::{Label, LabeledMesh};
 
 /// Names and one-line descriptions of the built-in scenes.
 pub const SCENES: &[(&str, &str)] = &[
-    ("sphere", "an icosphere, label 1 inside, 0 outside (--resolution = subdivisions, --radius)"),
-    ("spheres", "N random non-overlapping spheres with labels 1..=N (-n, --resolution, --seed)"),
-    ("double-bubble", "two bubbles sharing a wall: 3 labels and a triple curve (--resolution, --radius)"),
-    ("zalesak", "Zalesak's notched sphere (--resolution = grid cells per axis)"),
-    ("foam", "a Voronoi foam of N cells in the unit cube, labels 1..=N (-n, --seed)"),
-    ("copies", "k rotated, overlapping copies of --mesh FILE (default: the notched sphere), distinct labels (-n, --seed)"),
+    (
+        "sphere",
+        "an icosphere, label 1 inside, 0 outside (--resolution = subdivisions, --radius)",
+    ),
+    (
+        "spheres",
+        "N random non-overlapping spheres with labels 1..=N (-n, --resolution, --seed)",
+    ),
+    (
+        "double-bubble",
+        "two bubbles sharing a wall: 3 labels and a triple curve (--resolution, --radius)",
+    ),
+    (
+        "zalesak",
+        "Zalesak's notched sphere (--resolution = grid cells per axis)",
+    ),
+    (
+        "foam",
+        "a Voronoi foam of N cells in the unit cube, labels 1..=N (-n, --seed)",
+    ),
+    (
+        "copies",
+        "k rotated, overlapping copies of --mesh FILE (default: the notched sphere), distinct labels (-n, --seed)",
+    ),
 ];
 
 /// Parameters shared by the scene builders; `None` means the scene's default.
@@ -45,7 +63,12 @@ pub enum SceneError {
 pub fn build_scene(name: &str, o: &SceneOptions) -> Result<LabeledMesh, SceneError> {
     let resolution = |default: u32| o.resolution.unwrap_or(default);
     let mesh = match name {
-        "sphere" => generators::icosphere(resolution(4), DVec3::ZERO, o.radius.unwrap_or(1.0), [Label::OUTSIDE, Label::new(1)])?,
+        "sphere" => generators::icosphere(
+            resolution(4),
+            DVec3::ZERO,
+            o.radius.unwrap_or(1.0),
+            [Label::OUTSIDE, Label::new(1)],
+        )?,
         "spheres" => generators::random_spheres(
             o.count.unwrap_or(20),
             DVec3::ZERO,
@@ -54,7 +77,9 @@ pub fn build_scene(name: &str, o: &SceneOptions) -> Result<LabeledMesh, SceneErr
             resolution(2),
             o.seed,
         )?,
-        "double-bubble" => generators::double_bubble(o.radius.unwrap_or(1.0), resolution(48) as usize)?,
+        "double-bubble" => {
+            generators::double_bubble(o.radius.unwrap_or(1.0), resolution(48) as usize)?
+        }
         "zalesak" => generators::zalesak(resolution(64) as usize)?,
         "foam" => generators::voronoi_foam(o.count.unwrap_or(16), o.seed, DVec3::ZERO, DVec3::ONE)?,
         "copies" => {

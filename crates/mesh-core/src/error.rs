@@ -6,7 +6,9 @@ use crate::ids::{TriId, VertexId};
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum MeshError {
     /// A triangle refers to a vertex index the mesh does not have.
-    #[error("triangle {tri} refers to vertex {index}, but the mesh has only {vertex_count} vertices")]
+    #[error(
+        "triangle {tri} refers to vertex {index}, but the mesh has only {vertex_count} vertices"
+    )]
     VertexOutOfRange {
         /// Index of the offending triangle in the input.
         tri: usize,

@@ -104,7 +104,11 @@ impl LabeledMesh {
     }
 
     /// Builds a mesh from typed arrays whose indices are known to be in range.
-    fn from_parts(positions: Vec<DVec3>, tris: Vec<[VertexId; 3]>, labels: Vec<[Label; 2]>) -> Self {
+    fn from_parts(
+        positions: Vec<DVec3>,
+        tris: Vec<[VertexId; 3]>,
+        labels: Vec<[Label; 2]>,
+    ) -> Self {
         let opposite = vec![None; tris.len() * 6];
         let mut mesh = Self::dense(positions, tris, labels, opposite);
         mesh.rebuild_opposites();
@@ -160,7 +164,8 @@ impl LabeledMesh {
     /// pair the sides that face a common wedge.
     fn rebuild_opposites(&mut self) {
         self.opposite.fill(None);
-        let mut table = EdgeTable::build(self.tris.as_slice(), &self.tri_alive, self.positions.len());
+        let mut table =
+            EdgeTable::build(self.tris.as_slice(), &self.tri_alive, self.positions.len());
         let tris = self.tris.as_slice();
         let positions = self.positions.as_slice();
         let opposite = &mut self.opposite;
@@ -376,7 +381,8 @@ impl LabeledMesh {
             self.ring_head[v] = None;
             return Ok(v);
         }
-        check_count("vertices", self.positions.len() + 1).inspect_err(|_| self.live_vertices -= 1)?;
+        check_count("vertices", self.positions.len() + 1)
+            .inspect_err(|_| self.live_vertices -= 1)?;
         self.vertex_alive.push(true);
         self.ring_head.push(None);
         Ok(self.positions.push(p))
@@ -398,7 +404,11 @@ impl LabeledMesh {
 
     /// Adds a triangle and links it into the corner table: its three edges are re-paired
     /// radially (O(edge degree)).
-    pub fn add_triangle(&mut self, verts: [VertexId; 3], labels: [Label; 2]) -> Result<TriId, MeshError> {
+    pub fn add_triangle(
+        &mut self,
+        verts: [VertexId; 3],
+        labels: [Label; 2],
+    ) -> Result<TriId, MeshError> {
         for v in verts {
             if !self.is_vertex_alive(v) {
                 return Err(MeshError::NoSuchVertex(v));
@@ -463,7 +473,12 @@ impl LabeledMesh {
             for k in 0..3 {
                 let (p, q) = (tri[(k + 1) % 3], tri[(k + 2) % 3]);
                 if (p == lo && q == hi) || (p == hi && q == lo) {
-                    group.push(EdgeIncidence { lo, hi, tri: t, slot: k as u8 });
+                    group.push(EdgeIncidence {
+                        lo,
+                        hi,
+                        tri: t,
+                        slot: k as u8,
+                    });
                 }
             }
         }
@@ -535,7 +550,10 @@ impl LabeledMesh {
             }
         }
         *self = Self::dense(positions, tris, labels, opposite);
-        Compaction { vertex_map, tri_map }
+        Compaction {
+            vertex_map,
+            tri_map,
+        }
     }
 
     /// Plain arrays of the live mesh, densely renumbered: positions, triangles, labels.
@@ -548,7 +566,12 @@ impl LabeledMesh {
         }
         let (tris, labels) = self
             .triangles()
-            .map(|t| (self.tris[t].map(|v| map[v.idx()]), self.labels[t].map(|l| l.raw())))
+            .map(|t| {
+                (
+                    self.tris[t].map(|v| map[v.idx()]),
+                    self.labels[t].map(|l| l.raw()),
+                )
+            })
             .unzip();
         (positions, tris, labels)
     }

@@ -80,7 +80,8 @@ impl LabeledMesh {
                     shell.consistent &= self.corner_label(c0) == label;
                     // Signed volume of the cone from the origin, with the side's own
                     // orientation (its normal points into the region it faces).
-                    let [a, b, c] = [c0, c0.next(), c0.prev()].map(|c| self.position(self.corner_vertex(c)));
+                    let [a, b, c] =
+                        [c0, c0.next(), c0.prev()].map(|c| self.position(self.corner_vertex(c)));
                     shell.volume -= a.dot(b.cross(c)) / 6.0;
                     for c in [c0, c0.next(), c0.prev()] {
                         match self.opposite(c) {

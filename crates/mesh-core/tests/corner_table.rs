@@ -47,9 +47,15 @@ fn check_corner_table(mesh: &LabeledMesh) {
         for side in [Side::Front, Side::Back] {
             for slot in 0..3 {
                 let c = CornerId::of(t, side, slot);
-                let o = mesh.opposite(c).expect("closed mesh: every corner has an opposite");
+                let o = mesh
+                    .opposite(c)
+                    .expect("closed mesh: every corner has an opposite");
                 assert_eq!(mesh.opposite(o), Some(c), "opposite not symmetric at {c}");
-                assert_eq!(mesh.corner_label(o), mesh.corner_label(c), "labels differ across {c}");
+                assert_eq!(
+                    mesh.corner_label(o),
+                    mesh.corner_label(c),
+                    "labels differ across {c}"
+                );
                 let [a, b] = mesh.corner_edge(c);
                 assert_eq!(mesh.corner_edge(o), [b, a], "edge not reversed across {c}");
             }
@@ -63,10 +69,18 @@ fn tetrahedron_pairs_every_side() {
     check_corner_table(&mesh);
     let regions = mesh.regions();
     assert_eq!(regions.shells.len(), 2);
-    let inside = regions.shells.iter().find(|s| s.label == Label::new(1)).unwrap();
+    let inside = regions
+        .shells
+        .iter()
+        .find(|s| s.label == Label::new(1))
+        .unwrap();
     assert!(inside.closed && inside.consistent);
     assert!((inside.volume - 1.0 / 6.0).abs() < 1e-12);
-    let outside = regions.shells.iter().find(|s| s.label == Label::OUTSIDE).unwrap();
+    let outside = regions
+        .shells
+        .iter()
+        .find(|s| s.label == Label::OUTSIDE)
+        .unwrap();
     assert!((outside.volume + 1.0 / 6.0).abs() < 1e-12);
 }
 
@@ -82,7 +96,11 @@ fn non_manifold_edges_pair_by_wedge() {
     assert_eq!(around.len(), 3, "{around:?}");
     let regions = mesh.regions();
     assert_eq!(regions.shells.len(), 3);
-    let mut vols: Vec<(u32, f64)> = regions.shells.iter().map(|s| (s.label.raw(), s.volume)).collect();
+    let mut vols: Vec<(u32, f64)> = regions
+        .shells
+        .iter()
+        .map(|s| (s.label.raw(), s.volume))
+        .collect();
     vols.sort_by_key(|v| v.0);
     assert_eq!(vols[1].0, 1);
     assert!((vols[1].1 - 1.0 / 6.0).abs() < 1e-12, "{vols:?}");
@@ -150,13 +168,22 @@ fn from_raw_rejects_bad_indices() {
     let err = LabeledMesh::from_raw(vec![DVec3::ZERO; 3], &[[0, 1, 3]], &[[0, 1]]).unwrap_err();
     assert!(err.to_string().contains("vertex 3"), "{err}");
     assert!(LabeledMesh::from_raw(vec![DVec3::ZERO; 3], &[[0, 1, 2]], &[]).is_err());
-    let err = LabeledMesh::from_raw(vec![DVec3::ZERO; 3], &[[0, 1, 2]], &[[0, u32::MAX]]).unwrap_err();
-    assert!(matches!(err, mesh_core::MeshError::LabelOutOfRange { tri: 0, .. }), "{err}");
+    let err =
+        LabeledMesh::from_raw(vec![DVec3::ZERO; 3], &[[0, 1, 2]], &[[0, u32::MAX]]).unwrap_err();
+    assert!(
+        matches!(err, mesh_core::MeshError::LabelOutOfRange { tri: 0, .. }),
+        "{err}"
+    );
 }
 
 #[test]
 fn degenerate_and_nan_input_builds_without_panic() {
     let p = vec![DVec3::ZERO, DVec3::X, DVec3::splat(f64::NAN)];
-    let mesh = LabeledMesh::from_raw(p, &[[0, 0, 1], [0, 1, 2], [1, 0, 2], [2, 1, 0]], &[[0, 1]; 4]).unwrap();
+    let mesh = LabeledMesh::from_raw(
+        p,
+        &[[0, 0, 1], [0, 1, 2], [1, 0, 2], [2, 1, 0]],
+        &[[0, 1]; 4],
+    )
+    .unwrap();
     let _ = mesh.regions();
 }

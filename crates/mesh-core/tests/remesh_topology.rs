@@ -17,6 +17,10 @@ use mesh_core::remesh::{
 use mesh_core::validate::{ValidateOptions, validate};
 use mesh_core::{Label, LabeledMesh, VertexId};
 
+/// The scenes shared with the library's own remesh unit tests.
+#[path = "../src/remesh/fixtures.rs"]
+mod fixtures;
+
 // ----- scene construction ---------------------------------------------------------------
 
 /// A triangle `tri` with `front` on the side towards `toward` and `back` on the other.
@@ -180,26 +184,8 @@ fn bipyramid(upper: u32, lower: u32, middle: &[([u32; 3], [u32; 2])]) -> Labeled
 
 /// Two tetrahedra of label 1 sharing only vertex 0 (the second mirrored through it).
 fn bowtie() -> LabeledMesh {
-    let p = vec![
-        DVec3::ZERO,
-        DVec3::X,
-        DVec3::Y,
-        DVec3::Z,
-        -DVec3::X,
-        -DVec3::Y,
-        -DVec3::Z,
-    ];
-    let tris = [
-        [0, 2, 1],
-        [0, 1, 3],
-        [0, 3, 2],
-        [1, 2, 3],
-        [0, 4, 5],
-        [0, 6, 4],
-        [0, 5, 6],
-        [4, 6, 5],
-    ];
-    LabeledMesh::from_raw(p, &tris, &[[0, 1]; 8]).expect("indices in range")
+    let (p, tris, labels) = fixtures::bowtie_raw();
+    LabeledMesh::from_raw(p, &tris, &labels).expect("indices in range")
 }
 
 // ----- checks ---------------------------------------------------------------------------

@@ -7,8 +7,13 @@ use anyhow::Context;
 use super::ConvertArgs;
 
 pub(super) fn run(args: &ConvertArgs) -> anyhow::Result<ExitCode> {
-    let mesh = mesh_core::io::read_mesh(&args.input).with_context(|| format!("reading {}", args.input.display()))?;
+    let mesh = mesh_core::io::read_mesh(&args.input)
+        .with_context(|| format!("reading {}", args.input.display()))?;
     super::write_mesh_file(&mesh, &args.output, args.binary)?;
-    println!("wrote {} ({} triangles)", args.output.display(), mesh.num_triangles());
+    println!(
+        "wrote {} ({} triangles)",
+        args.output.display(),
+        mesh.num_triangles()
+    );
     Ok(ExitCode::SUCCESS)
 }

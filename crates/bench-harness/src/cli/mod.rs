@@ -94,15 +94,22 @@ pub struct ConvertArgs {
 }
 
 /// Writes a mesh by extension; PLY is ASCII unless `binary`.
-fn write_mesh_file(mesh: &mesh_core::LabeledMesh, path: &std::path::Path, binary: bool) -> anyhow::Result<()> {
+fn write_mesh_file(
+    mesh: &mesh_core::LabeledMesh,
+    path: &std::path::Path,
+    binary: bool,
+) -> anyhow::Result<()> {
     use mesh_core::io::{MeshFormat, PlyFormat, write_ply};
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|e| anyhow::anyhow!("cannot create directory {}: {e}", dir.display()))?;
+        std::fs::create_dir_all(dir)
+            .map_err(|e| anyhow::anyhow!("cannot create directory {}: {e}", dir.display()))?;
     }
     match MeshFormat::from_path(path)? {
         MeshFormat::Ply if !binary => {
-            let file = std::fs::File::create(path).map_err(|e| anyhow::anyhow!("cannot write {}: {e}", path.display()))?;
-            write_ply(mesh, std::io::BufWriter::new(file), PlyFormat::Ascii).map_err(|e| e.with_path(path))?;
+            let file = std::fs::File::create(path)
+                .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", path.display()))?;
+            write_ply(mesh, std::io::BufWriter::new(file), PlyFormat::Ascii)
+                .map_err(|e| e.with_path(path))?;
         }
         _ => mesh_core::io::write_mesh(mesh, path)?,
     }

@@ -83,5 +83,9 @@ pub(super) fn run(args: &ValidateArgs) -> anyhow::Result<ExitCode> {
         }
         println!("{}", if valid { "valid" } else { "INVALID" });
     }
-    Ok(if valid { ExitCode::SUCCESS } else { ExitCode::from(1) })
+    Ok(if valid {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    })
 }

@@ -4,7 +4,7 @@ use glam::{DMat3, DVec3};
 use mesh_core::{LabeledMesh, VertexId};
 use rayon::prelude::*;
 
-use super::VelocityField;
+use super::{Flow, VelocityField};
 
 /// Vertices per rayon task: a field evaluation costs tens to hundreds of flops, so a few
 /// hundred vertices amortise the task overhead.
@@ -60,6 +60,42 @@ pub fn advect(
                 x
             }
         })
+        .collect()
+}
+
+/// An ambient [`VelocityField`] whose flow is plain advection of every vertex with one
+/// [`Integrator`]. Implementing it is all such a field needs to be a [`Flow`]: the
+/// blanket impl below proposes [`advect`] positions and hands the field itself to the
+/// collision backend, so the ambient flows share that code instead of repeating it.
+pub trait AdvectedFlow: VelocityField {
+    /// Short stable name, returned by [`Flow::name`].
+    const NAME: &'static str;
+
+    /// The integrator of vertex trajectories.
+    fn integrator(&self) -> Integrator;
+}
+
+impl<F: AdvectedFlow> Flow for F {
+    fn name(&self) -> &str {
+        F::NAME
+    }
+
+    fn propose(&self, mesh: &LabeledMesh, t: f64, dt: f64) -> Vec<DVec3> {
+        advect(mesh, self, self.integrator(), t, dt)
+    }
+
+    fn velocity_field(&self, _t: f64) -> Option<&dyn VelocityField> {
+        Some(self)
+    }
+}
+
+/// One forward Euler step `x + dt·u` of every vertex slot, `velocities` indexed like the
+/// slots (the geometric flows give dead slots zero velocity, so they stay put).
+pub(crate) fn euler_step(mesh: &LabeledMesh, velocities: &[DVec3], dt: f64) -> Vec<DVec3> {
+    mesh.positions()
+        .iter()
+        .zip(velocities)
+        .map(|(&x, &u)| x + dt * u)
         .collect()
 }
 

@@ -17,12 +17,11 @@
 use std::f64::consts::PI;
 
 use glam::{DMat3, DVec3};
-use mesh_core::LabeledMesh;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use super::error::{check_positive, invalid};
-use super::{Flow, FlowError, Integrator, VelocityField, advect};
+use super::{AdvectedFlow, FlowError, Integrator, VelocityField};
 
 /// Parameters of [`CurlNoiseFlow`], with documented defaults.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -151,17 +150,11 @@ impl VelocityField for CurlNoiseFlow {
     }
 }
 
-impl Flow for CurlNoiseFlow {
-    fn name(&self) -> &str {
-        "curl-noise"
-    }
+impl AdvectedFlow for CurlNoiseFlow {
+    const NAME: &'static str = "curl-noise";
 
-    fn propose(&self, mesh: &LabeledMesh, t: f64, dt: f64) -> Vec<DVec3> {
-        advect(mesh, self, self.integrator, t, dt)
-    }
-
-    fn velocity_field(&self, _t: f64) -> Option<&dyn VelocityField> {
-        Some(self)
+    fn integrator(&self) -> Integrator {
+        self.integrator
     }
 }
 

@@ -17,10 +17,9 @@
 use std::f64::consts::PI;
 
 use glam::{DMat3, DVec3};
-use mesh_core::LabeledMesh;
 
 use super::error::check_positive;
-use super::{Flow, FlowError, Integrator, VelocityField, advect};
+use super::{AdvectedFlow, FlowError, Integrator, VelocityField};
 
 /// The Enright field with period `T` (see the module doc), advected by RK4 by default.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -113,17 +112,11 @@ impl VelocityField for EnrightFlow {
     }
 }
 
-impl Flow for EnrightFlow {
-    fn name(&self) -> &str {
-        "enright"
-    }
+impl AdvectedFlow for EnrightFlow {
+    const NAME: &'static str = "enright";
 
-    fn propose(&self, mesh: &LabeledMesh, t: f64, dt: f64) -> Vec<DVec3> {
-        advect(mesh, self, self.integrator, t, dt)
-    }
-
-    fn velocity_field(&self, _t: f64) -> Option<&dyn VelocityField> {
-        Some(self)
+    fn integrator(&self) -> Integrator {
+        self.integrator
     }
 }
 

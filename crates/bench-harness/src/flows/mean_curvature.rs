@@ -28,6 +28,7 @@ use glam::DVec3;
 use mesh_core::{IdVec, LabeledMesh, VertexId};
 use rayon::prelude::*;
 
+use super::advect::euler_step;
 use super::error::check_positive;
 use super::{Flow, FlowError};
 
@@ -180,12 +181,7 @@ impl Flow for MeanCurvatureFlow {
     }
 
     fn propose(&self, mesh: &LabeledMesh, _t: f64, dt: f64) -> Vec<DVec3> {
-        let v = self.velocities(mesh);
-        mesh.positions()
-            .iter()
-            .zip(v.as_slice())
-            .map(|(&x, &u)| x + dt * u)
-            .collect()
+        euler_step(mesh, self.velocities(mesh).as_slice(), dt)
     }
 
     fn max_stable_dt(&self, mesh: &LabeledMesh) -> Option<f64> {

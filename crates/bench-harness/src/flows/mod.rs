@@ -44,7 +44,7 @@ mod test_meshes;
 use glam::{DMat3, DVec3};
 use mesh_core::LabeledMesh;
 
-pub use advect::{Integrator, advect, finite_difference_gradient};
+pub use advect::{AdvectedFlow, Integrator, advect, finite_difference_gradient};
 pub use curl_noise::{CurlNoiseFlow, CurlNoiseParams};
 pub use cyclic::cyclic_normal_flow;
 pub use enright::EnrightFlow;

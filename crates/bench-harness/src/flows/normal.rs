@@ -51,6 +51,7 @@ use glam::DVec3;
 use mesh_core::{IdVec, Label, LabeledMesh, TriId, VertexId, geometry};
 use rayon::prelude::*;
 
+use super::advect::euler_step;
 use super::lsq::{PlaneLsq, RANK_RATIO};
 use super::{Flow, FlowError, InterfaceSpeeds};
 
@@ -254,12 +255,7 @@ impl Flow for NormalFlow {
     }
 
     fn propose(&self, mesh: &LabeledMesh, _t: f64, dt: f64) -> Vec<DVec3> {
-        let v = self.velocities(mesh);
-        mesh.positions()
-            .iter()
-            .zip(v.as_slice())
-            .map(|(&x, &u)| x + dt * u)
-            .collect()
+        euler_step(mesh, self.velocities(mesh).as_slice(), dt)
     }
 }
 

@@ -6,10 +6,9 @@
 use std::f64::consts::TAU;
 
 use glam::{DMat3, DVec3};
-use mesh_core::LabeledMesh;
 
 use super::error::{check_finite, check_finite_vec, check_positive, invalid};
-use super::{Flow, FlowError, Integrator, VelocityField, advect};
+use super::{AdvectedFlow, FlowError, Integrator, VelocityField};
 
 /// Rotation about the axis `a` (unit) through `centre` at angular speed `ω` (radians per
 /// unit time, counter-clockwise about `a`), advected by RK4 by default.
@@ -69,25 +68,19 @@ impl VelocityField for RigidRotation {
     }
 }
 
-impl Flow for RigidRotation {
-    fn name(&self) -> &str {
-        "rotation"
-    }
+impl AdvectedFlow for RigidRotation {
+    const NAME: &'static str = "rotation";
 
-    fn propose(&self, mesh: &LabeledMesh, t: f64, dt: f64) -> Vec<DVec3> {
-        advect(mesh, self, self.integrator, t, dt)
-    }
-
-    fn velocity_field(&self, _t: f64) -> Option<&dyn VelocityField> {
-        Some(self)
+    fn integrator(&self) -> Integrator {
+        self.integrator
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::flows::finite_difference_gradient;
     use crate::flows::test_meshes::icosphere;
+    use crate::flows::{Flow, finite_difference_gradient};
     use mesh_core::Label;
 
     #[test]

@@ -22,12 +22,18 @@ pub struct Blend {
 impl Blend {
     /// A copy of one vertex.
     pub fn copy(v: VertexId) -> Blend {
-        Blend { ids: [v; 3], weights: [1.0, 0.0, 0.0] }
+        Blend {
+            ids: [v; 3],
+            weights: [1.0, 0.0, 0.0],
+        }
     }
 
     /// `(1−t)·a + t·b`.
     pub fn lerp(a: VertexId, b: VertexId, t: f64) -> Blend {
-        Blend { ids: [a, b, a], weights: [1.0 - t, t, 0.0] }
+        Blend {
+            ids: [a, b, a],
+            weights: [1.0 - t, t, 0.0],
+        }
     }
 
     /// Barycentric combination of three vertices.
@@ -51,7 +57,10 @@ impl VertexAttributes {
 
     /// `dim` values per vertex slot of `mesh`, all zero.
     pub fn zeros(mesh: &LabeledMesh, dim: usize) -> Self {
-        Self { dim, values: vec![0.0; dim * mesh.vertex_capacity()] }
+        Self {
+            dim,
+            values: vec![0.0; dim * mesh.vertex_capacity()],
+        }
     }
 
     /// Values per vertex.
@@ -84,7 +93,10 @@ impl VertexAttributes {
             out.fill(0.0);
             for (id, w) in b.ids.iter().zip(b.weights) {
                 if w != 0.0 {
-                    for (o, x) in out.iter_mut().zip(&values[id.idx() * dim..(id.idx() + 1) * dim]) {
+                    for (o, x) in out
+                        .iter_mut()
+                        .zip(&values[id.idx() * dim..(id.idx() + 1) * dim])
+                    {
                         *o += w * x;
                     }
                 }

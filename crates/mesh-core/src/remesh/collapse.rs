@@ -351,7 +351,14 @@ pub(crate) mod tests {
 
     /// An octahedron with vertex 0 at `p0` (regular when `p0 = (1, 0, 0)`).
     fn octahedron(p0: DVec3) -> LabeledMesh {
-        let p = vec![p0, DVec3::Y, -DVec3::X, -DVec3::Y, DVec3::Z, -DVec3::Z];
+        octahedron_at([p0, DVec3::Y, -DVec3::X, -DVec3::Y, DVec3::Z, -DVec3::Z])
+    }
+
+    /// The octahedron of label 1 in label 0 with corners `p`, listed as +x, +y, −x, −y,
+    /// +z, −z of the regular one; fronts face outwards while `p` keeps that shape. Shared
+    /// with the flip tests, which squash it.
+    pub(crate) fn octahedron_at(p: [DVec3; 6]) -> LabeledMesh {
+        let p = p.to_vec();
         let tris = [
             [0, 1, 4],
             [1, 2, 4],

@@ -131,11 +131,17 @@ impl Edit {
         for (verts, _) in &self.add_tris {
             for &v in verts {
                 match v {
-                    VertexRef::Old(v) if !mesh.is_vertex_alive(v) || self.remove_vertices.contains(&v) => {
-                        return Err(EditError::Malformed(format!("new triangle uses vertex {v}, which will not exist")));
+                    VertexRef::Old(v)
+                        if !mesh.is_vertex_alive(v) || self.remove_vertices.contains(&v) =>
+                    {
+                        return Err(EditError::Malformed(format!(
+                            "new triangle uses vertex {v}, which will not exist"
+                        )));
                     }
                     VertexRef::New(i) if i as usize >= self.new_vertices.len() => {
-                        return Err(EditError::Malformed(format!("new triangle uses new vertex #{i}, not created")));
+                        return Err(EditError::Malformed(format!(
+                            "new triangle uses new vertex #{i}, not created"
+                        )));
                     }
                     _ => {}
                 }
@@ -143,15 +149,23 @@ impl Edit {
         }
         for m in &self.moves {
             if !mesh.is_vertex_alive(m.vertex) {
-                return Err(EditError::Malformed(format!("moves dead vertex {}", m.vertex)));
+                return Err(EditError::Malformed(format!(
+                    "moves dead vertex {}",
+                    m.vertex
+                )));
             }
         }
         for &v in &self.remove_vertices {
             if !mesh.is_vertex_alive(v) {
                 return Err(EditError::Malformed(format!("removes dead vertex {v}")));
             }
-            if mesh.vertex_triangles(v).any(|t| !self.remove_tris.contains(&t)) {
-                return Err(EditError::Malformed(format!("removes vertex {v}, still used by kept triangles")));
+            if mesh
+                .vertex_triangles(v)
+                .any(|t| !self.remove_tris.contains(&t))
+            {
+                return Err(EditError::Malformed(format!(
+                    "removes vertex {v}, still used by kept triangles"
+                )));
             }
         }
         Ok(())
@@ -169,8 +183,10 @@ pub fn apply_edit(
     edit.check(mesh)?;
     guard.check(mesh, edit).map_err(EditError::Vetoed)?;
     let capacity_needed = mesh.vertex_capacity() + edit.new_vertices.len();
-    crate::ids::VertexId::from_usize(capacity_needed)
-        .ok_or(MeshError::TooLarge { what: "vertices", count: capacity_needed })?;
+    crate::ids::VertexId::from_usize(capacity_needed).ok_or(MeshError::TooLarge {
+        what: "vertices",
+        count: capacity_needed,
+    })?;
 
     // From here on nothing can fail: every id was checked above.
     for m in &edit.moves {

@@ -234,31 +234,21 @@ pub(crate) fn flip_edge_in(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::remesh::collapse::tests::octahedron_at;
     use crate::remesh::guard::NoGuard;
     use crate::remesh::split::tests::triple_edge_scene;
 
     /// A flat-ish square pyramid pair (octahedron squashed): edge 0–2 across the square is
     /// long, 1–3 short after squashing along x.
     fn octahedron(stretch: f64) -> LabeledMesh {
-        let p = vec![
+        octahedron_at([
             DVec3::new(stretch, 0.0, 0.0),
             DVec3::new(0.0, 1.0, 0.0),
             DVec3::new(-stretch, 0.0, 0.0),
             DVec3::new(0.0, -1.0, 0.0),
             DVec3::new(0.0, 0.0, 1.0),
             DVec3::new(0.0, 0.0, -1.0),
-        ];
-        let tris = [
-            [0, 1, 4],
-            [1, 2, 4],
-            [2, 3, 4],
-            [3, 0, 4],
-            [1, 0, 5],
-            [2, 1, 5],
-            [3, 2, 5],
-            [0, 3, 5],
-        ];
-        LabeledMesh::from_raw(p, &tris, &[[0, 1]; 8]).expect("valid arrays")
+        ])
     }
 
     #[test]

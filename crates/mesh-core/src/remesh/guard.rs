@@ -83,7 +83,11 @@ const MAX_CELLS_PER_BOX: i64 = 27;
 
 impl DirtyGrid {
     fn reset(&mut self, cell: f64) {
-        self.cell = if cell.is_finite() && cell > 0.0 { cell } else { 1.0 };
+        self.cell = if cell.is_finite() && cell > 0.0 {
+            cell
+        } else {
+            1.0
+        };
         self.buckets.clear();
         self.oversize.clear();
         self.inserts = 0;
@@ -100,7 +104,10 @@ impl DirtyGrid {
         if span.x * span.y * span.z > MAX_CELLS_PER_BOX as f64 {
             return None;
         }
-        Some(([lo.x as i64, lo.y as i64, lo.z as i64], [hi.x as i64, hi.y as i64, hi.z as i64]))
+        Some((
+            [lo.x as i64, lo.y as i64, lo.z as i64],
+            [hi.x as i64, hi.y as i64, hi.z as i64],
+        ))
     }
 
     fn insert(&mut self, t: TriId, b: &Aabb) {
@@ -189,7 +196,8 @@ impl StaticIntersectionGuard {
 
     fn mark_dirty(&mut self, mesh: &LabeledMesh, t: TriId) {
         if mesh.is_triangle_alive(t) {
-            self.dirty.insert(t, &Aabb::from_points(&mesh.tri_positions(t)));
+            self.dirty
+                .insert(t, &Aabb::from_points(&mesh.tri_positions(t)));
         }
     }
 }
@@ -214,11 +222,14 @@ impl EditGuard for StaticIntersectionGuard {
         };
         self.changed.clear();
         for (verts, _) in &edit.add_tris {
-            self.changed.push(verts.map(|r| (key(r), edit.end_position(mesh, r))));
+            self.changed
+                .push(verts.map(|r| (key(r), edit.end_position(mesh, r))));
         }
         for &t in &self.moved {
-            self.changed
-                .push(mesh.tri(t).map(|v| (v.raw(), edit.end_position(mesh, VertexRef::Old(v)))));
+            self.changed.push(
+                mesh.tri(t)
+                    .map(|v| (v.raw(), edit.end_position(mesh, VertexRef::Old(v)))),
+            );
         }
         for (i, a) in self.changed.iter().enumerate() {
             let points = a.map(|x| x.1);
@@ -346,7 +357,11 @@ mod tests {
         for (k, &v) in vertices.iter().cycle().take(600).enumerate() {
             let p = mesh.position(v);
             // Alternate small safe moves and large inward jumps that may cross the surface.
-            let to = if k % 7 == 3 { -p * 0.9 } else { p * (1.0 + 0.01 * ((k % 5) as f64 - 2.0)) };
+            let to = if k % 7 == 3 {
+                -p * 0.9
+            } else {
+                p * (1.0 + 0.01 * ((k % 5) as f64 - 2.0))
+            };
             let edit = move_edit(v, to);
             let mut trial = mesh.clone();
             trial.set_position(v, to);

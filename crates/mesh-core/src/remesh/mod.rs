@@ -12,12 +12,16 @@
 //! - [`split`], [`flip`], [`collapse`], [`smooth`]: the mesh-improvement operations
 //!   (El Topo §3.5–3.6);
 //! - [`improve`]: the driver that sweeps them to keep edge lengths in range.
+//!
+//! `fixtures` (tests only) holds hand-built scenes shared with `tests/remesh_topology.rs`.
 
 pub mod attributes;
 pub mod collapse;
 pub mod degenerate;
 pub mod edit;
 pub mod features;
+#[cfg(test)]
+mod fixtures;
 pub mod flip;
 pub mod guard;
 pub mod improve;
@@ -28,17 +32,18 @@ pub mod smooth;
 pub mod split;
 
 pub use attributes::{Blend, VertexAttributes};
-pub use edit::{Applied, Edit, EditError, NewVertex, VertexMove, VertexRef, apply_edit};
-pub use guard::{EditGuard, NoGuard, StaticIntersectionGuard};
+pub use collapse::{CollapseError, CollapseParams, CollapseRefusal, collapse_edge};
 pub use degenerate::{DegenerateReport, remove_degenerate};
+pub use edit::{Applied, Edit, EditError, NewVertex, VertexMove, VertexRef, apply_edit};
+pub use features::{FeatureParams, VertexKind, classify_vertex, classify_vertices};
+pub use flip::{FlipCriterion, FlipError, FlipParams, FlipRefusal, flip_edge};
+pub use guard::{EditGuard, NoGuard, StaticIntersectionGuard};
+pub use improve::{ImproveParams, ImproveReport, OpCounts, improve, improve_with};
 pub use pinch::pinch_singular_vertices;
 pub use region_graph::{RegionGraph, irregular_vertices};
 pub use separate::{
-    AreaDecrease, SeparationParams, SeparationReport, SeparationStrength, VelocityDivergence, separate_irregular_vertices,
+    AreaDecrease, SeparationParams, SeparationReport, SeparationStrength, VelocityDivergence,
+    separate_irregular_vertices,
 };
-pub use collapse::{CollapseError, CollapseParams, CollapseRefusal, collapse_edge};
-pub use features::{FeatureParams, VertexKind, classify_vertex, classify_vertices};
-pub use flip::{FlipCriterion, FlipError, FlipParams, FlipRefusal, flip_edge};
-pub use improve::{ImproveParams, ImproveReport, OpCounts, improve, improve_with};
 pub use smooth::{SmoothOutcome, SmoothParams, smooth_vertices};
 pub use split::{SplitPlacement, split_edge};

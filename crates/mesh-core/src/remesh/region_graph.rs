@@ -268,6 +268,7 @@ mod tests {
     use glam::DVec3;
 
     use super::*;
+    use crate::remesh::fixtures::bowtie_raw;
 
     /// A tetrahedron of label 1 in label 0, oriented so every front faces outwards.
     fn tetrahedron() -> LabeledMesh {
@@ -299,25 +300,9 @@ mod tests {
 
     #[test]
     fn two_tetrahedra_touching_at_a_vertex_are_four_nodes() {
-        // Second tetrahedron: the first mirrored through the origin, sharing vertex 0.
-        let mut p: Vec<DVec3> = tetrahedron().to_raw().0;
-        p.extend([
-            DVec3::new(-1.0, 0.0, 0.0),
-            DVec3::new(0.0, -1.0, 0.0),
-            DVec3::new(0.0, 0.0, -1.0),
-        ]);
-        // Mirroring reverses orientation, so reverse each mirrored triangle.
-        let tris = [
-            [0, 2, 1],
-            [0, 1, 3],
-            [0, 3, 2],
-            [1, 2, 3],
-            [0, 4, 5],
-            [0, 6, 4],
-            [0, 5, 6],
-            [4, 6, 5],
-        ];
-        let mesh = LabeledMesh::from_raw(p, &tris, &[[0, 1]; 8]).unwrap();
+        // The tetrahedron above and its mirror image through the origin, sharing vertex 0.
+        let (p, tris, labels) = bowtie_raw();
+        let mesh = LabeledMesh::from_raw(p, &tris, &labels).unwrap();
         let mut g = RegionGraph::new();
         g.build(&mesh, VertexId::new(0));
         assert_eq!(g.nodes().len(), 4);

@@ -541,30 +541,13 @@ pub(crate) fn edit_area_change(mesh: &LabeledMesh, edit: &Edit) -> f64 {
 mod tests {
     use super::*;
     use crate::remesh::NoGuard;
+    use crate::remesh::fixtures::bowtie_raw;
     use crate::remesh::region_graph::irregular_vertices;
 
     /// Two tetrahedra of label 1 in label 0 touching at vertex 0 (the second mirrored).
     fn bowtie() -> LabeledMesh {
-        let p = vec![
-            DVec3::ZERO,
-            DVec3::X,
-            DVec3::Y,
-            DVec3::Z,
-            -DVec3::X,
-            -DVec3::Y,
-            -DVec3::Z,
-        ];
-        let tris = [
-            [0, 2, 1],
-            [0, 1, 3],
-            [0, 3, 2],
-            [1, 2, 3],
-            [0, 4, 5],
-            [0, 6, 4],
-            [0, 5, 6],
-            [4, 6, 5],
-        ];
-        LabeledMesh::from_raw(p, &tris, &[[0, 1]; 8]).unwrap()
+        let (p, tris, labels) = bowtie_raw();
+        LabeledMesh::from_raw(p, &tris, &labels).unwrap()
     }
 
     #[test]

@@ -152,4 +152,3 @@ pub(super) fn pair_intersects(mesh: &LabeledMesh, a: TriId, b: TriId) -> bool {
         _ => false,
     }
 }
-

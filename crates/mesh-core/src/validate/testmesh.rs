@@ -1,10 +1,9 @@
-//! Small meshes for the tests of this crate, built by hand so these tests do not depend
-//! on the generators module.
-
-use std::collections::HashMap;
+//! Small meshes for the tests of this crate: tetrahedra built by hand, and the icosphere
+//! taken from the generators module.
 
 use glam::DVec3;
 
+use crate::ids::Label;
 use crate::mesh::LabeledMesh;
 
 /// Raw arrays of a mesh: positions, triangles, `[front, back]` labels.
@@ -42,63 +41,13 @@ pub(crate) fn build((p, t, l): Raw) -> LabeledMesh {
 
 /// An icosphere of radius `r` about `center` after `levels` subdivisions
 /// (20·4^levels triangles), outward normals, outside 0 in front and `inside` behind.
+///
+/// The raw arrays of [`crate::generators::icosphere`], so these tests and the generator
+/// share one construction. Callers pass a level of at most
+/// [`crate::generators::MAX_SUBDIVISIONS`], a positive radius and `inside != 0`.
 pub(crate) fn icosphere(center: DVec3, r: f64, levels: u32, inside: u32) -> Raw {
-    let g = (1.0 + 5f64.sqrt()) / 2.0;
-    let mut p: Vec<DVec3> = [
-        (-1.0, g, 0.0),
-        (1.0, g, 0.0),
-        (-1.0, -g, 0.0),
-        (1.0, -g, 0.0),
-        (0.0, -1.0, g),
-        (0.0, 1.0, g),
-        (0.0, -1.0, -g),
-        (0.0, 1.0, -g),
-        (g, 0.0, -1.0),
-        (g, 0.0, 1.0),
-        (-g, 0.0, -1.0),
-        (-g, 0.0, 1.0),
-    ]
-    .iter()
-    .map(|&(x, y, z)| DVec3::new(x, y, z).normalize())
-    .collect();
-    let mut t: Vec<[u32; 3]> = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    for _ in 0..levels {
-        let mut mid: HashMap<(u32, u32), u32> = HashMap::with_capacity(t.len() * 2);
-        let mut next = Vec::with_capacity(t.len() * 4);
-        for &[a, b, c] in &t {
-            let mut m = |x: u32, y: u32| {
-                *mid.entry((x.min(y), x.max(y))).or_insert_with(|| {
-                    p.push(((p[x as usize] + p[y as usize]) * 0.5).normalize());
-                    p.len() as u32 - 1
-                })
-            };
-            let (ab, bc, ca) = (m(a, b), m(b, c), m(c, a));
-            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-        }
-        t = next;
+    match crate::generators::icosphere(levels, center, r, [Label::new(0), Label::new(inside)]) {
+        Ok(m) => m.to_raw(),
+        Err(e) => panic!("test icosphere is malformed: {e}"),
     }
-    let p = p.into_iter().map(|q| center + q * r).collect();
-    let l = vec![[0, inside]; t.len()];
-    (p, t, l)
 }

@@ -409,7 +409,11 @@ fn process_cpu_seconds() -> f64 {
 #[ignore]
 fn throughput_million_triangle_sphere() {
     let t0 = std::time::Instant::now();
-    let mesh = build(icosphere(DVec3::ZERO, 1.0, 8, 1));
+    let labels = [Label::new(0), Label::new(1)];
+    let mesh = match crate::generators::icosphere(8, DVec3::ZERO, 1.0, labels) {
+        Ok(m) => m,
+        Err(e) => panic!("{e}"),
+    };
     let n = mesh.num_triangles() as f64;
     eprintln!(
         "built {} triangles in {:.2?}",
