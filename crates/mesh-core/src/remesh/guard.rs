@@ -51,7 +51,7 @@ type Keyed = [(u32, DVec3); 3];
 ///
 /// Candidates come from a BVH over the triangles' boxes, built lazily, plus a hash grid of
 /// the triangles changed since it was built (whose boxes in the BVH may be stale); the BVH
-/// is rebuilt when the changes grow past a fraction of the mesh. So a check costs
+/// is rebuilt when the changed triangles reach a quarter of the mesh. So a check costs
 /// O(log n) plus the changes near it. The guard learns of changes through
 /// [`EditGuard::committed`]: if the mesh is changed any other way, call
 /// [`StaticIntersectionGuard::reset`].
@@ -68,18 +68,39 @@ pub struct StaticIntersectionGuard {
 
 /// Triangles changed since the BVH was built, bucketed on a uniform grid (cell ≈ a
 /// triangle's size) so that a check looks only at the changes near it. A triangle that
-/// changes again is inserted again at its new box; stale entries only cost a box test.
+/// changes again moves to the cells of its new box, so the grid holds current boxes only.
 #[derive(Debug, Default)]
 struct DirtyGrid {
     cell: f64,
     buckets: HashMap<[i64; 3], Vec<TriId>>,
     /// Triangles too large for a few cells, checked against every query.
     oversize: Vec<TriId>,
-    inserts: usize,
+    /// Where each changed triangle is filed (by triangle slot).
+    placed: Vec<Option<Placement>>,
+    /// Distinct triangles filed.
+    distinct: usize,
+}
+
+/// The cells a triangle is filed under, or the oversize list.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Placement {
+    Cells([i64; 3], [i64; 3]),
+    Oversize,
 }
 
 /// A triangle box spanning more cells than this goes to the oversize list.
 const MAX_CELLS_PER_BOX: i64 = 27;
+
+/// Calls `f` for every cell of an inclusive integer range.
+fn for_cells(lo: [i64; 3], hi: [i64; 3], mut f: impl FnMut([i64; 3])) {
+    for x in lo[0]..=hi[0] {
+        for y in lo[1]..=hi[1] {
+            for z in lo[2]..=hi[2] {
+                f([x, y, z]);
+            }
+        }
+    }
+}
 
 impl DirtyGrid {
     fn reset(&mut self, cell: f64) {
@@ -90,7 +111,8 @@ impl DirtyGrid {
         };
         self.buckets.clear();
         self.oversize.clear();
-        self.inserts = 0;
+        self.placed.clear();
+        self.distinct = 0;
     }
 
     /// Integer cell range of a box, or `None` if it is too large (or not finite).
@@ -110,36 +132,47 @@ impl DirtyGrid {
         ))
     }
 
+    /// Files `t` under box `b`, first removing it from where it was filed before.
     fn insert(&mut self, t: TriId, b: &Aabb) {
-        self.inserts += 1;
-        match self.cells(b) {
-            Some((lo, hi)) => {
-                for x in lo[0]..=hi[0] {
-                    for y in lo[1]..=hi[1] {
-                        for z in lo[2]..=hi[2] {
-                            self.buckets.entry([x, y, z]).or_default().push(t);
-                        }
-                    }
-                }
-            }
-            None => self.oversize.push(t),
+        if t.idx() >= self.placed.len() {
+            self.placed.resize(t.idx() + 1, None);
         }
+        match self.placed[t.idx()] {
+            None => self.distinct += 1,
+            Some(Placement::Oversize) => self.oversize.retain(|&x| x != t),
+            Some(Placement::Cells(lo, hi)) => {
+                let buckets = &mut self.buckets;
+                for_cells(lo, hi, |c| {
+                    if let Some(bucket) = buckets.get_mut(&c)
+                        && let Some(i) = bucket.iter().position(|&x| x == t)
+                    {
+                        bucket.swap_remove(i);
+                    }
+                });
+            }
+        }
+        let placement = match self.cells(b) {
+            Some((lo, hi)) => {
+                let buckets = &mut self.buckets;
+                for_cells(lo, hi, |c| buckets.entry(c).or_default().push(t));
+                Placement::Cells(lo, hi)
+            }
+            None => {
+                self.oversize.push(t);
+                Placement::Oversize
+            }
+        };
+        self.placed[t.idx()] = Some(placement);
     }
 
     fn query(&self, b: &Aabb, out: &mut Vec<TriId>) {
         out.extend_from_slice(&self.oversize);
         match self.cells(b) {
-            Some((lo, hi)) => {
-                for x in lo[0]..=hi[0] {
-                    for y in lo[1]..=hi[1] {
-                        for z in lo[2]..=hi[2] {
-                            if let Some(bucket) = self.buckets.get(&[x, y, z]) {
-                                out.extend_from_slice(bucket);
-                            }
-                        }
-                    }
+            Some((lo, hi)) => for_cells(lo, hi, |c| {
+                if let Some(bucket) = self.buckets.get(&c) {
+                    out.extend_from_slice(bucket);
                 }
-            }
+            }),
             // A query box too large for the grid: every changed triangle is a candidate.
             None => out.extend(self.buckets.values().flatten()),
         }
@@ -162,7 +195,8 @@ impl StaticIntersectionGuard {
     /// cheaper than carrying the changes.
     fn refresh(&mut self, mesh: &LabeledMesh) {
         let capacity = mesh.triangle_capacity();
-        if self.index.is_some() && self.dirty.inserts <= 256 + capacity / 8 {
+        // Rebuild once a quarter of the mesh has changed: the BVH then misses too much.
+        if self.index.is_some() && self.dirty.distinct <= 256 + capacity / 4 {
             return;
         }
         let boxes: Vec<Aabb> = (0..capacity)
@@ -183,7 +217,7 @@ impl StaticIntersectionGuard {
             .filter(|e| e.is_finite())
             .sum::<f64>()
             / live;
-        self.dirty.reset(mean_extent * 2.0);
+        self.dirty.reset(mean_extent);
         // A build only fails for more boxes than ids, which a mesh cannot have; without an
         // index every triangle goes to the changed set, which is slow but still exact.
         self.index = Bvh::build(&boxes).ok();
