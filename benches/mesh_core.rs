@@ -20,12 +20,19 @@ fn big_sphere() -> LabeledMesh {
 fn bench_connectivity(c: &mut Criterion) {
     let (positions, tris, labels) = big_sphere().to_raw();
     let mut group = c.benchmark_group("corner_table");
-    group.sample_size(10).measurement_time(Duration::from_secs(10));
+    group
+        .sample_size(10)
+        .measurement_time(Duration::from_secs(10));
     group.throughput(Throughput::Elements(tris.len() as u64));
     // One thread: the target is per core.
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("thread pool");
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("thread pool");
     group.bench_function("build_1.3M_triangles_1_thread", |b| {
-        b.iter(|| pool.install(|| black_box(LabeledMesh::from_raw(positions.clone(), &tris, &labels))))
+        b.iter(|| {
+            pool.install(|| black_box(LabeledMesh::from_raw(positions.clone(), &tris, &labels)))
+        })
     });
     group.finish();
 }
@@ -33,12 +40,21 @@ fn bench_connectivity(c: &mut Criterion) {
 fn bench_validate(c: &mut Criterion) {
     let mesh = big_sphere();
     let mut group = c.benchmark_group("validate");
-    group.sample_size(10).measurement_time(Duration::from_secs(15));
+    group
+        .sample_size(10)
+        .measurement_time(Duration::from_secs(15));
     group.throughput(Throughput::Elements(mesh.num_triangles() as u64));
     let plain = ValidateOptions::default();
-    let exact = ValidateOptions { intersections: true, ..ValidateOptions::default() };
-    group.bench_function("invariants_1.3M_triangles", |b| b.iter(|| black_box(validate(&mesh, &plain))));
-    group.bench_function("with_intersections_1.3M_triangles", |b| b.iter(|| black_box(validate(&mesh, &exact))));
+    let exact = ValidateOptions {
+        intersections: true,
+        ..ValidateOptions::default()
+    };
+    group.bench_function("invariants_1.3M_triangles", |b| {
+        b.iter(|| black_box(validate(&mesh, &plain)))
+    });
+    group.bench_function("with_intersections_1.3M_triangles", |b| {
+        b.iter(|| black_box(validate(&mesh, &exact)))
+    });
     group.finish();
 }
 

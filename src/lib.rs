@@ -88,7 +88,10 @@ pub enum BackendError {
 }
 
 /// Makes a tracker of the chosen backend around an initial mesh.
-pub fn make_tracker(backend: Backend, mesh: LabeledMesh) -> Result<Box<dyn SurfaceTracker>, BackendError> {
+pub fn make_tracker(
+    backend: Backend,
+    mesh: LabeledMesh,
+) -> Result<Box<dyn SurfaceTracker>, BackendError> {
     let _ = mesh;
     match backend.unavailable_reason() {
         Some(reason) => Err(BackendError::Unavailable { backend, reason }),
@@ -112,6 +115,9 @@ mod tests {
                 assert!(err.to_string().contains(reason));
             }
         }
-        assert!(matches!("levelset".parse::<Backend>(), Err(BackendError::Unknown(_))));
+        assert!(matches!(
+            "levelset".parse::<Backend>(),
+            Err(BackendError::Unknown(_))
+        ));
     }
 }
