@@ -4,10 +4,20 @@
 //! 2014) on El Topo (Brochu & Bridson 2009): exact continuous collision detection, impact
 //! zones, snap merging, T1/T2 vertex separation — the mesh never tangles.
 //!
-//! Not implemented yet (issue 5): the crate is wired into the workspace and the facade so
-//! that the harness reports it as unavailable instead of failing to build.
+//! Built so far (issue 5, item 1):
+//! - [`ccd`]: continuous collision detection with no false negatives —
+//!   [`ccd::ccd_vertex_triangle`], [`ccd::ccd_edge_edge`] returning an [`ccd::Impact`];
+//! - [`proximity`]: static closest points — [`proximity::proximity_vertex_triangle`],
+//!   [`proximity::proximity_edge_edge`] returning a [`proximity::Proximity`].
+//!
+//! The tracker itself is not implemented yet: the crate is wired into the workspace and the
+//! facade so that the harness reports it as unavailable instead of failing to build.
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+pub mod ccd;
+pub mod proximity;
+
 /// Why this backend cannot be constructed yet; the facade reports it to the user.
-pub const UNAVAILABLE: Option<&str> = Some("the collision backend is not implemented yet (issue 5)");
+pub const UNAVAILABLE: Option<&str> =
+    Some("the collision backend is not implemented yet (issue 5)");
