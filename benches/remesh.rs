@@ -43,6 +43,9 @@ fn noisy_spheres() -> LabeledMesh {
     mesh
 }
 
+/// Makes a fresh guard for each run (guards index the mesh they see).
+type MakeGuard = fn() -> Box<dyn EditGuard>;
+
 fn bench_improve(c: &mut Criterion) {
     let mesh = noisy_spheres();
     let mut group = c.benchmark_group("improve");
@@ -51,7 +54,7 @@ fn bench_improve(c: &mut Criterion) {
         .measurement_time(Duration::from_secs(20));
     group.throughput(Throughput::Elements(mesh.num_triangles() as u64));
     let params = ImproveParams::default();
-    let guards: [(&str, fn() -> Box<dyn EditGuard>); 2] = [
+    let guards: [(&str, MakeGuard); 2] = [
         ("no_guard", || Box::new(NoGuard)),
         ("static_intersection_guard", || {
             Box::new(StaticIntersectionGuard::new())
