@@ -10,7 +10,7 @@
 use glam::DVec3;
 
 use crate::error::MeshError;
-use crate::ids::{Label, TriId, VertexId};
+use crate::ids::{Label, MAX_INDEX, TriId, VertexId};
 use crate::mesh::LabeledMesh;
 
 use super::attributes::{Blend, VertexAttributes};
@@ -182,11 +182,24 @@ pub fn apply_edit(
 ) -> Result<Applied, EditError> {
     edit.check(mesh)?;
     guard.check(mesh, edit).map_err(EditError::Vetoed)?;
-    let capacity_needed = mesh.vertex_capacity() + edit.new_vertices.len();
-    crate::ids::VertexId::from_usize(capacity_needed).ok_or(MeshError::TooLarge {
-        what: "vertices",
-        count: capacity_needed,
-    })?;
+    // Capacity is the one thing the mesh could still refuse midway: check it up front
+    // (free slots are reused first, so the appended count is at most the added count).
+    let vertices_needed = mesh.vertex_capacity() + edit.new_vertices.len();
+    if vertices_needed > MAX_INDEX as usize {
+        return Err(MeshError::TooLarge {
+            what: "vertices",
+            count: vertices_needed,
+        }
+        .into());
+    }
+    let corners_needed = (mesh.triangle_capacity() + edit.add_tris.len()) * 6;
+    if corners_needed > MAX_INDEX as usize {
+        return Err(MeshError::TooLarge {
+            what: "triangles",
+            count: corners_needed,
+        }
+        .into());
+    }
 
     // From here on nothing can fail: every id was checked above.
     for m in &edit.moves {
