@@ -2,8 +2,10 @@
 //! tracked scenes of `surftrack run`).
 
 use glam::DVec3;
-use mesh_core::generators::{self, GeneratorError};
+use mesh_core::generators::{self, GeneratorError, place_random_spheres, spheres_mesh};
 use mesh_core::{Label, LabeledMesh};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 
 /// Names and one-line descriptions of the built-in scenes.
 pub const SCENES: &[(&str, &str)] = &[
@@ -91,5 +93,32 @@ pub fn build_scene(name: &str, o: &SceneOptions) -> Result<LabeledMesh, SceneErr
         }
         other => return Err(SceneError::Unknown(other.to_string())),
     };
+    Ok(mesh)
+}
+
+/// The remeshing benchmark's scene (`benches/remesh.rs`, `examples/remesh.rs`):
+/// 40 spheres of 5120 triangles each (~205k triangles) with radii varying threefold, so one
+/// target edge length makes the small ones collapse and the large ones split; every vertex
+/// is pushed radially from its sphere's centre by up to ±20 % of that sphere's edge length,
+/// so flips and smoothing have work too. Still intersection-free: each sphere stays
+/// star-shaped about its centre, and the jitter stays below half the smallest gap.
+pub fn noisy_spheres() -> Result<LabeledMesh, GeneratorError> {
+    let spheres = place_random_spheres(40, DVec3::ZERO, DVec3::ONE, [0.03, 0.09], 7)?;
+    let mut mesh = spheres_mesh(&spheres, 4)?;
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let vertices: Vec<_> = mesh.vertices().collect();
+    for v in vertices {
+        let p = mesh.position(v);
+        let Some(sphere) = spheres.iter().min_by(|a, b| {
+            (a.centre.distance(p) - a.radius)
+                .abs()
+                .total_cmp(&(b.centre.distance(p) - b.radius).abs())
+        }) else {
+            continue;
+        };
+        // An icosphere of 4 subdivisions has edges of about 0.066 radius.
+        let jitter = rng.random_range(-1.0..1.0) * 0.2 * 0.066 * sphere.radius;
+        mesh.set_position(v, p + (p - sphere.centre).normalize_or_zero() * jitter);
+    }
     Ok(mesh)
 }
