@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{inverted, mean_edge, sphere, stages, union, vector};
+use common::{cube, inverted, mean_edge, sphere, stages, union, vector};
 use glam::{DVec3, IVec3};
 use grid_tracker::{FaceScratch, GridOptions, intersect_face};
 use mesh_core::LabeledMesh;
@@ -138,36 +138,11 @@ fn inside_out_sphere_has_negative_entries() {
     assert!(st.flaws.stats().non_physical_cells > 0);
 }
 
-/// A closed box whose faces lie on grid planes and whose corners are grid nodes: every
-/// ray through it runs along faces, edges and vertices.
-fn box_mesh(lo: f64, hi: f64) -> LabeledMesh {
-    let p: Vec<DVec3> = (0..8)
-        .map(|i| {
-            DVec3::new(
-                [lo, hi][i & 1],
-                [lo, hi][(i >> 1) & 1],
-                [lo, hi][(i >> 2) & 1],
-            )
-        })
-        .collect();
-    let quads = [
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-    ];
-    let t: Vec<[u32; 3]> = quads
-        .iter()
-        .flat_map(|&[a, b, c, d]| [[a, b, c], [a, c, d]])
-        .collect();
-    LabeledMesh::from_raw(p, &t, &[[0, 1]; 12]).expect("box")
-}
-
 #[test]
 fn box_on_grid_planes_is_consistent_on_all_axes() {
-    let m = box_mesh(0.5, 2.0);
+    // Faces on grid planes and corners on grid nodes: every ray through it runs along
+    // faces, edges and vertices.
+    let m = cube(DVec3::splat(0.5), DVec3::splat(2.0), 0, 1);
     let st = stages(
         &m,
         0.5,

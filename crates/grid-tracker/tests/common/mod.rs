@@ -1,38 +1,15 @@
 //! Scenes and checks shared by the integration tests.
 #![allow(dead_code)]
 
-use glam::DVec3;
 use grid_tracker::{FlawOptions, FlawedRegion, Grid, GridOptions, MaterialOptions, Materials};
-use mesh_core::generators::icosphere;
-use mesh_core::{Label, LabeledMesh};
+use mesh_core::LabeledMesh;
 
-pub fn sphere(sub: u32, centre: DVec3, radius: f64, outside: u32, inside: u32) -> LabeledMesh {
-    icosphere(
-        sub,
-        centre,
-        radius,
-        [Label::new(outside), Label::new(inside)],
-    )
-    .expect("valid sphere")
-}
-
-pub fn union(meshes: &[LabeledMesh]) -> LabeledMesh {
-    let (mut pos, mut tris, mut labels) = (Vec::new(), Vec::new(), Vec::new());
-    for m in meshes {
-        let (p, t, l) = m.to_raw();
-        let off = pos.len() as u32;
-        pos.extend(p);
-        tris.extend(t.iter().map(|t| t.map(|v| v + off)));
-        labels.extend(l);
-    }
-    LabeledMesh::from_raw(pos, &tris, &labels).expect("valid union")
-}
-
-pub fn inverted(m: &LabeledMesh) -> LabeledMesh {
-    let (p, t, l) = m.to_raw();
-    let t: Vec<[u32; 3]> = t.iter().map(|&[a, b, c]| [a, c, b]).collect();
-    LabeledMesh::from_raw(p, &t, &l).expect("valid inverted mesh")
-}
+// The scene builders are the unit tests' own (they need nothing crate-internal).
+#[path = "../../src/test_util.rs"]
+mod scenes;
+// Each test binary uses a subset (hence also `allow(dead_code)` above).
+#[allow(unused_imports)]
+pub use scenes::{cube, inverted, sphere, union};
 
 /// Mean edge length (each triangle's three edges; shared edges count twice, which does
 /// not change the mean of a uniform mesh much).
