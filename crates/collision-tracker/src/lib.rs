@@ -15,8 +15,12 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+pub mod broadphase;
 pub mod ccd;
+pub mod guard;
+pub mod merge;
 pub mod proximity;
+pub mod resolve;
 
 /// Why this backend cannot be constructed yet; the facade reports it to the user.
 pub const UNAVAILABLE: Option<&str> =

@@ -5,7 +5,10 @@
 //!    ([`materials::assign_materials`]);
 //! 3. [`flaws`] — §6: the flawed region ([`flaws::detect_flaws`]).
 
+pub mod cut;
 pub mod flaws;
 pub mod grid;
+pub mod labels;
 pub mod materials;
 pub mod rebuild;
+pub mod transfer;

@@ -1,0 +1,1 @@
+//! Swept-box and proximity broad phase. Work in progress (issue 5).

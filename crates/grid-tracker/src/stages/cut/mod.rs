@@ -1,0 +1,1 @@
+//! Stage 4 (§7, Appendix A): local mesh cutting. Work in progress (issue 4).
