@@ -1,1 +1,394 @@
-//! Stage 5a (§8.1): one material label per grid vertex. Work in progress (issue 4).
+//! Stage 5a (§8.1 of Heiss-Synak et al. 2024): one material label per grid node of the
+//! flawed region ("correcting material vectors").
+//!
+//! Glossary:
+//! - **region node**: a corner of a flawed cell; these are the nodes the rebuild reads.
+//! - **physical node**: its material vector is one-hot and the three ray axes agree
+//!   ([`Materials::physical_label`]; [`Materials::material_at`] for unallocated nodes).
+//!   It keeps its label. Every other region node is **non-physical** (mixed, or flawed).
+//! - **breaking point** ([`BreakingPoint`]): a point on a grid edge where, walking along
+//!   the edge, the material vector turns from physical to non-physical (or back) — the
+//!   last point with a well-defined label before an ill-defined stretch (Fig. 10). Its
+//!   label is the physical side's. Found from the crossings of §5 ([`breaking`]).
+//! - **fast marching** ([`march`]): every non-physical node takes the label of its
+//!   nearest breaking point, found by a Dijkstra-ordered propagation of closest points
+//!   over the region's grid nodes (Sethian 1999; the propagated quantity is the nearest
+//!   breaking point itself, so distances are true Euclidean distances to it). Physical
+//!   nodes relay points without taking their labels.
+//!
+//! Fallback (not in the paper, which assumes every non-physical component touches a
+//! breaking point): a non-physical node that no breaking point reaches (none lies in its
+//! connected part of the region) takes the label of the nearest physical region node
+//! adjacent to its non-physical component, propagated the same way
+//! (its "breaking point" is that node's position); a component with no physical neighbour
+//! at all — impossible for a region inside the grid, since nodes next to intact cells are
+//! physical — gets the outside label 0. Both cases are counted in [`LabelStats`].
+//!
+//! Besides the labels, [`NodeLabels`] keeps for every region edge crossed by the mesh the
+//! data §8.3 places vertices with ([`EdgeTransitions`]): the rebuild runs on the cut mesh,
+//! whose triangle ids no longer match the crossings of §5, so everything the placement
+//! needs from the original mesh is gathered here.
+//!
+//! The region's nodes are numbered once ([`region_nodes`], shared with the PIC transfer of
+//! §8.4), with a dense lookup for compact regions.
+//!
+//! Entry point: [`correct_labels`].
+
+pub mod breaking;
+pub mod march;
+pub mod nodes;
+
+use std::collections::HashMap;
+use std::hash::BuildHasherDefault;
+
+use glam::{DVec3, IVec3};
+use mesh_core::predicates::Axis;
+use mesh_core::{Label, LabeledMesh};
+use rayon::prelude::*;
+
+use crate::stages::flaws::FlawedRegion;
+use crate::stages::grid::Grid;
+use crate::stages::grid::primitives::{GridEdge, unit};
+use crate::stages::grid::tiles::TileHasher;
+use crate::stages::materials::{MaterialVector, Materials};
+
+pub use breaking::{BreakingPoint, EdgeTransitions};
+pub use nodes::{NodeIndex, region_nodes};
+
+/// Why labels could not be assigned.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum LabelError {
+    /// Mesh, grid and materials do not belong together (the mesh must be the one the
+    /// materials were assigned for, i.e. the mesh *before* cutting).
+    #[error("mismatched inputs: {0}")]
+    Mismatch(&'static str),
+    /// More region nodes than `u32` indices.
+    #[error("the flawed region has {nodes} grid nodes, more than u32 indices")]
+    TooManyNodes {
+        /// Nodes counted.
+        nodes: usize,
+    },
+}
+
+/// Counts describing a labelling.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LabelStats {
+    /// Region nodes (corners of flawed cells).
+    pub nodes: usize,
+    /// Region nodes with a physical vector.
+    pub physical_nodes: usize,
+    /// Region nodes labelled by fast marching from breaking points.
+    pub marched_nodes: usize,
+    /// Region edges walked for crossings and breaking points.
+    pub scanned_edges: usize,
+    /// Breaking points found.
+    pub breaking_points: usize,
+    /// Non-physical nodes no breaking point reached, labelled from the nearest physical
+    /// node instead (fallback).
+    pub fallback_nodes: usize,
+    /// Non-physical nodes not reached at all, labelled 0 (last resort).
+    pub unreached_nodes: usize,
+    /// Label updates of the marching (work measure).
+    pub updates: usize,
+}
+
+/// What one region node knows.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct NodeEntry {
+    label: Label,
+    physical: bool,
+    /// The nearest breaking point of a non-physical node.
+    breaking: Option<DVec3>,
+}
+
+/// A hash map from grid edges, with the grid's integer hasher.
+type EdgeMap<V> = HashMap<GridEdge, V, BuildHasherDefault<TileHasher>>;
+
+/// One label per region node (§8.1), sparse over lattice nodes, plus the per-edge data of
+/// §8.3. Built by [`correct_labels`]; read-only afterwards.
+#[derive(Clone, Debug, Default)]
+pub struct NodeLabels {
+    index: NodeIndex,
+    nodes: Vec<IVec3>,
+    entries: Vec<NodeEntry>,
+    edges: EdgeMap<EdgeTransitions>,
+    breaking_points: Vec<BreakingPoint>,
+    stats: LabelStats,
+}
+
+impl NodeLabels {
+    /// The label of region node `node`; `None` outside the region.
+    #[inline]
+    pub fn label(&self, node: IVec3) -> Option<Label> {
+        self.entry(node).map(|e| e.label)
+    }
+
+    /// The nearest breaking point of a non-physical region node (for a fallback node, the
+    /// physical node it took its label from); `None` for physical nodes, nodes outside the
+    /// region and nodes labelled by the last resort.
+    #[inline]
+    pub fn breaking_point(&self, node: IVec3) -> Option<DVec3> {
+        self.entry(node).and_then(|e| e.breaking)
+    }
+
+    /// Whether `node` is a region node with a physical vector (its label is its own).
+    #[inline]
+    pub fn is_physical(&self, node: IVec3) -> bool {
+        self.entry(node).is_some_and(|e| e.physical)
+    }
+
+    /// Crossings and breaking points of region edge `edge`, if the mesh crosses it or a
+    /// breaking point lies on it (§8.3 places edge vertices with them).
+    #[inline]
+    pub fn edge_transitions(&self, edge: &GridEdge) -> Option<EdgeTransitions> {
+        self.edges.get(edge).copied()
+    }
+
+    /// Every breaking point found, in a deterministic order.
+    pub fn breaking_points(&self) -> &[BreakingPoint] {
+        &self.breaking_points
+    }
+
+    /// Every region node with its label, in lattice order (z, then y, then x).
+    pub fn nodes(&self) -> impl Iterator<Item = (IVec3, Label)> + '_ {
+        self.nodes
+            .iter()
+            .zip(&self.entries)
+            .map(|(&n, e)| (n, e.label))
+    }
+
+    /// Number of region nodes.
+    pub fn len(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// True for an empty region.
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+
+    /// Counts.
+    pub fn stats(&self) -> LabelStats {
+        self.stats
+    }
+
+    fn entry(&self, node: IVec3) -> Option<&NodeEntry> {
+        self.index.get(node).map(|i| &self.entries[i as usize])
+    }
+}
+
+/// The physical label of any lattice node: allocated nodes by their vector and axis
+/// agreement, unallocated ones by the vector they inherit along x (never flawed).
+fn physical_status(grid: &Grid, materials: &Materials, p: IVec3) -> Option<Label> {
+    match grid.node_id(p) {
+        Some(n) => materials.physical_label(n),
+        None => materials.material_at(grid, p).label(),
+    }
+}
+
+/// Assigns a label to every corner of every flawed cell (§8.1).
+///
+/// `mesh` must be the mesh the materials were assigned for (before cutting): breaking
+/// points are found by walking the crossings of §5, which name its triangles.
+///
+/// Physical nodes keep their label. Breaking points are found on every edge of every
+/// flawed cell ([`breaking`]); each non-physical node then takes the label of the nearest
+/// one by fast marching ([`march`]), with the fallback described in the module docs.
+/// Deterministic: the result does not depend on thread timing.
+pub fn correct_labels(
+    mesh: &LabeledMesh,
+    grid: &Grid,
+    materials: &Materials,
+    region: &FlawedRegion,
+) -> Result<NodeLabels, LabelError> {
+    if grid.triangle_capacity() != mesh.triangle_capacity() {
+        return Err(LabelError::Mismatch("the grid was built from another mesh"));
+    }
+    if materials.num_nodes() != grid.num_nodes() {
+        return Err(LabelError::Mismatch(
+            "the materials were assigned on another grid",
+        ));
+    }
+    let lattice = *grid.lattice();
+
+    // Region nodes, in lattice order.
+    let (nodes, index) =
+        nodes::region_nodes(region).map_err(|e| LabelError::TooManyNodes { nodes: e.0 })?;
+    let status: Vec<Option<Label>> = nodes
+        .par_iter()
+        .map(|&p| physical_status(grid, materials, p))
+        .collect();
+    let idx = |p: IVec3| index.get(p).map(|i| i as usize);
+
+    // Breaking points and crossing data on every edge of a flawed cell: edge (n, a) for
+    // every region node n whose +a neighbour is a region node and which borders a flawed
+    // cell.
+    let scans: Vec<breaking::EdgeScans> = (0..nodes.len())
+        .into_par_iter()
+        .fold(
+            || (MaterialVector::default(), breaking::EdgeScans::default()),
+            |(mut buf, mut out), i| {
+                let n = nodes[i];
+                for axis in Axis::ALL {
+                    let edge = GridEdge { node: n, axis };
+                    let Some(j) = idx(n + unit(axis)) else {
+                        continue;
+                    };
+                    if !edge.cells().iter().any(|&c| region.is_flawed(c)) {
+                        continue;
+                    }
+                    breaking::scan_edge(
+                        mesh,
+                        grid,
+                        materials,
+                        edge,
+                        [status[i], status[j]],
+                        &mut buf,
+                        &mut out,
+                    );
+                }
+                (buf, out)
+            },
+        )
+        .map(|(_, out)| out)
+        .collect();
+
+    let mut stats = LabelStats {
+        nodes: nodes.len(),
+        physical_nodes: status.iter().filter(|s| s.is_some()).count(),
+        ..LabelStats::default()
+    };
+    let mut edges: EdgeMap<EdgeTransitions> = EdgeMap::default();
+    let mut points: Vec<(GridEdge, BreakingPoint)> = Vec::new();
+    for s in scans {
+        stats.scanned_edges += s.scanned;
+        edges.extend(s.transitions);
+        points.extend(s.points);
+    }
+    // Deterministic order, independent of how rayon split the work.
+    points.sort_unstable_by(|a, b| {
+        let key = |(e, p): &(GridEdge, BreakingPoint)| {
+            (
+                [e.node.z, e.node.y, e.node.x, e.axis.index() as i32],
+                p.label,
+            )
+        };
+        key(a).cmp(&key(b)).then(
+            a.1.position
+                .to_array()
+                .partial_cmp(&b.1.position.to_array())
+                .unwrap_or(std::cmp::Ordering::Equal),
+        )
+    });
+    stats.breaking_points = points.len();
+
+    // Fast marching from the breaking points. Physical nodes relay the nearest point
+    // without taking its label: a breaking point between two physical ends (a mixed
+    // stretch inside one edge) or across a physical node may still be the nearest one.
+    let positions: Vec<DVec3> = nodes.iter().map(|&n| lattice.node_position(n)).collect();
+    let open: Vec<bool> = status.iter().map(Option::is_none).collect();
+    let all = vec![true; nodes.len()];
+    let mut best: Vec<Option<march::Nearest>> = vec![None; nodes.len()];
+    let neighbours = |i: u32, out: &mut [u32; march::STENCIL]| {
+        let p = nodes[i as usize];
+        let mut k = 0;
+        for d in march::OFFSETS {
+            if let Some(j) = index.get(p + d) {
+                out[k] = j;
+                k += 1;
+            }
+        }
+        k
+    };
+    let seeds = points.iter().flat_map(|(e, bp)| {
+        [e.node, e.end()]
+            .into_iter()
+            .filter_map(|n| idx(n).map(|i| (i as u32, *bp)))
+    });
+    if open.iter().any(|&o| o) {
+        stats.updates += march::march(&positions, &all, &neighbours, seeds, &mut best);
+    }
+    for (b, &o) in best.iter_mut().zip(&open) {
+        if !o {
+            *b = None;
+        }
+    }
+    stats.marched_nodes = best.iter().filter(|b| b.is_some()).count();
+
+    // Fallback: components no breaking point reached take the nearest physical label.
+    let unreached: Vec<bool> = open
+        .iter()
+        .zip(&best)
+        .map(|(&o, b)| o && b.is_none())
+        .collect();
+    if unreached.iter().any(|&u| u) {
+        let mut fallback: Vec<Option<march::Nearest>> = vec![None; nodes.len()];
+        let mut seeds: Vec<(u32, BreakingPoint)> = Vec::new();
+        let mut nb = [0u32; march::STENCIL];
+        for (i, _) in unreached.iter().enumerate().filter(|(_, u)| **u) {
+            let k = neighbours(i as u32, &mut nb);
+            for &j in &nb[..k] {
+                if let Some(label) = status[j as usize] {
+                    seeds.push((
+                        i as u32,
+                        BreakingPoint {
+                            position: positions[j as usize],
+                            label,
+                        },
+                    ));
+                }
+            }
+        }
+        stats.updates += march::march(
+            &positions,
+            &unreached,
+            &neighbours,
+            seeds.into_iter(),
+            &mut fallback,
+        );
+        for (b, f) in best.iter_mut().zip(fallback) {
+            if let Some(f) = f {
+                *b = Some(f);
+                stats.fallback_nodes += 1;
+            }
+        }
+    }
+
+    let entries: Vec<NodeEntry> = status
+        .iter()
+        .zip(&best)
+        .map(|(&s, b)| match (s, b) {
+            (Some(label), _) => NodeEntry {
+                label,
+                physical: true,
+                breaking: None,
+            },
+            (None, Some(b)) => NodeEntry {
+                label: b.point.label,
+                physical: false,
+                breaking: Some(b.point.position),
+            },
+            (None, None) => NodeEntry {
+                label: Label::OUTSIDE,
+                physical: false,
+                breaking: None,
+            },
+        })
+        .collect();
+    stats.unreached_nodes = status
+        .iter()
+        .zip(&best)
+        .filter(|(s, b)| s.is_none() && b.is_none())
+        .count();
+    Ok(NodeLabels {
+        index,
+        nodes,
+        entries,
+        edges,
+        breaking_points: points.into_iter().map(|p| p.1).collect(),
+        stats,
+    })
+}
+
+#[cfg(test)]
+mod tests;

@@ -24,6 +24,9 @@ pub mod fans;
 pub mod keys;
 pub mod octants;
 pub mod place;
+pub mod position;
+pub mod region;
+pub mod smooth_curves;
 pub mod weld;
 
 pub use fans::{BoundarySegment, FanError, fan_boundary_face};
@@ -33,7 +36,12 @@ pub use keys::{
 };
 pub use octants::{FaceMask, has_interface, triangulate_octants};
 pub use place::{CellPoints, average_cell_points, midpoint_position};
+pub use position::edge_vertex_position;
+pub use region::{RebuildError, RebuildOptions, RebuildReport, RebuildStats, rebuild_region};
+pub use smooth_curves::{element_bounds, smooth_nonmanifold_curves};
 pub use weld::{WeldError, Welder};
 
+#[cfg(test)]
+mod region_tests;
 #[cfg(test)]
 mod tests;

@@ -1,0 +1,239 @@
+//! Tests of §8.1 on real scenes: clean spheres keep their physical labels, overlaps take
+//! the label of the nearest breaking point.
+
+use glam::{DVec3, IVec3};
+use mesh_core::LabeledMesh;
+
+use super::*;
+use crate::stages::flaws::{FlawOptions, detect_flaws};
+use crate::stages::grid::{GridOptions, build_grid};
+use crate::stages::materials::{MaterialOptions, assign_materials};
+use crate::stages::rebuild::cell_corners;
+use crate::test_util::{sphere, union};
+
+struct Run {
+    grid: Grid,
+    mats: Materials,
+    region: FlawedRegion,
+}
+
+/// Grid, materials and flaws of `mesh`; with `everything`, the region is grown to a box
+/// of cells one layer beyond the band.
+fn run(mesh: &LabeledMesh, ell: f64, everything: bool) -> Run {
+    let grid = build_grid(mesh, ell, &GridOptions::default()).unwrap();
+    let mats = assign_materials(mesh, &grid, &MaterialOptions::default()).unwrap();
+    let mut region = detect_flaws(mesh, &grid, &mats, &FlawOptions::default()).unwrap();
+    if everything {
+        let [lo, hi] = grid.cell_bounds().unwrap();
+        let (lo, hi) = (lo - IVec3::ONE, hi + IVec3::ONE);
+        let mut all = Vec::new();
+        for z in lo.z..=hi.z {
+            for y in lo.y..=hi.y {
+                for x in lo.x..=hi.x {
+                    all.push(IVec3::new(x, y, z));
+                }
+            }
+        }
+        region.grow(mesh, &grid, &mats, &all);
+    }
+    Run { grid, mats, region }
+}
+
+#[test]
+fn clean_sphere_nodes_keep_their_physical_labels() {
+    let c = DVec3::new(0.03, -0.02, 0.01);
+    let mesh = sphere(3, c, 1.0, 0, 1);
+    let r = run(&mesh, 0.3, true);
+    let labels = correct_labels(&mesh, &r.grid, &r.mats, &r.region).unwrap();
+    let s = labels.stats();
+    assert!(s.nodes > 500, "{s:?}");
+    assert_eq!(s.physical_nodes, s.nodes);
+    assert_eq!(s.breaking_points, 0);
+    assert!(s.scanned_edges > 0, "edges crossing the sphere are walked");
+    let lattice = r.grid.lattice();
+    for (n, l) in labels.nodes() {
+        assert!(labels.is_physical(n) && labels.breaking_point(n).is_none());
+        let d = lattice.node_position(n).distance(c);
+        if d < 0.95 {
+            assert_eq!(l, Label::new(1), "node {n} at distance {d}");
+        } else if d > 1.0 {
+            assert_eq!(l, Label::new(0), "node {n} at distance {d}");
+        }
+    }
+    // Every corner of every flawed cell has a label; nothing beyond.
+    for cell in r.region.cells() {
+        for n in cell_corners(cell) {
+            assert!(labels.label(n).is_some());
+        }
+    }
+    assert_eq!(labels.label(IVec3::splat(1000)), None);
+    // Edges crossed once carry the crossing as first and last.
+    let crossed = r
+        .region
+        .cells()
+        .flat_map(crate::stages::grid::primitives::cell_edges);
+    let mut seen = 0;
+    for e in crossed {
+        if let Some(t) = labels.edge_transitions(&e) {
+            let (first, last) = (t.first_crossing.unwrap(), t.last_crossing.unwrap());
+            let axis = e.axis.index();
+            let (lo, hi) = (
+                lattice.plane(axis, e.node[axis]),
+                lattice.plane(axis, e.node[axis] + 1),
+            );
+            assert!(lo <= first && first <= last && last <= hi);
+            assert!(t.lower_breaking.is_none() && t.upper_breaking.is_none());
+            seen += 1;
+        }
+    }
+    assert!(seen > 0);
+}
+
+/// Two spheres of labels 1 (left, centre x = −0.5) and 2 (right, x = +0.5), radius 1:
+/// the lens between them is non-physical. A lens node nearer the lens' left face (the
+/// right sphere's surface, beyond which only sphere 1 remains) takes label 1, and
+/// symmetrically.
+#[test]
+fn overlap_nodes_take_the_label_beyond_the_nearest_face() {
+    let (cl, cr) = (DVec3::new(-0.5, 0.01, 0.02), DVec3::new(0.5, 0.01, 0.02));
+    let mesh = union(&[sphere(3, cl, 1.0, 0, 1), sphere(3, cr, 1.0, 0, 2)]);
+    let ell = 0.2;
+    let r = run(&mesh, ell, false);
+    let labels = correct_labels(&mesh, &r.grid, &r.mats, &r.region).unwrap();
+    let s = labels.stats();
+    assert!(s.nodes > 0 && s.breaking_points > 0, "{s:?}");
+    assert!(
+        s.physical_nodes < s.nodes,
+        "the lens has non-physical nodes"
+    );
+    assert_eq!((s.fallback_nodes, s.unreached_nodes), (0, 0), "{s:?}");
+    let lattice = r.grid.lattice();
+    let bps = labels.breaking_points();
+    let mut checked = 0;
+    for (n, l) in labels.nodes() {
+        if labels.is_physical(n) {
+            continue;
+        }
+        let p = lattice.node_position(n);
+        assert!(l == Label::new(1) || l == Label::new(2), "node {n}: {l}");
+        // Its breaking point is (nearly) the nearest of all: closest-point propagation is
+        // approximate (measured here: within 0.1ℓ).
+        let bp = labels.breaking_point(n).expect("marched");
+        let nearest = bps
+            .iter()
+            .map(|b| b.position.distance(p))
+            .fold(f64::MAX, f64::min);
+        assert!(
+            bp.distance(p) <= nearest + 0.15 * ell,
+            "node {n}: {} vs nearest {nearest}",
+            bp.distance(p)
+        );
+        assert!(bps.iter().any(|b| b.position == bp && b.label == l));
+        let (to_left_face, to_right_face) = (1.0 - p.distance(cr), 1.0 - p.distance(cl));
+        if to_left_face + ell < to_right_face {
+            assert_eq!(l, Label::new(1), "node {n} at {p}");
+            checked += 1;
+        } else if to_right_face + ell < to_left_face {
+            assert_eq!(l, Label::new(2), "node {n} at {p}");
+            checked += 1;
+        }
+    }
+    assert!(checked > 10, "only {checked} nodes decisively placed");
+    // Breaking points lie on grid edges: two coordinates on grid planes.
+    for b in bps {
+        let on_plane = (0..3)
+            .filter(|&a| lattice.plane(a, lattice.locate(a, b.position[a])) == b.position[a])
+            .count();
+        assert!(on_plane >= 2, "{b:?}");
+    }
+}
+
+#[test]
+fn mismatched_inputs_are_errors() {
+    let mesh = sphere(2, DVec3::ZERO, 1.0, 0, 1);
+    let r = run(&mesh, 0.4, false);
+    let other = sphere(1, DVec3::ZERO, 1.0, 0, 1);
+    assert!(matches!(
+        correct_labels(&other, &r.grid, &r.mats, &r.region),
+        Err(LabelError::Mismatch(_))
+    ));
+    // A clean sphere has an empty region and an empty labelling.
+    let labels = correct_labels(&mesh, &r.grid, &r.mats, &r.region).unwrap();
+    assert!(labels.is_empty() && labels.nodes().next().is_none());
+}
+
+#[test]
+fn marching_takes_the_nearest_point_along_a_chain() {
+    // Seven nodes on a line, x = 0..6, all open; breaking points at x = −0.5 (label 1)
+    // and x = 6.2 (label 2).
+    let positions: Vec<DVec3> = (0..7).map(|i| DVec3::new(f64::from(i), 0.0, 0.0)).collect();
+    let open = vec![true; 7];
+    let neighbours = |i: u32, out: &mut [u32; march::STENCIL]| {
+        let mut k = 0;
+        if i > 0 {
+            out[k] = i - 1;
+            k += 1;
+        }
+        if i < 6 {
+            out[k] = i + 1;
+            k += 1;
+        }
+        k
+    };
+    let bp = |x: f64, l: u32| BreakingPoint {
+        position: DVec3::new(x, 0.0, 0.0),
+        label: Label::new(l),
+    };
+    let mut best = vec![None; 7];
+    let seeds = [(0u32, bp(-0.5, 1)), (6u32, bp(6.2, 2))];
+    march::march(&positions, &open, &neighbours, seeds.into_iter(), &mut best);
+    let got: Vec<u32> = best.iter().map(|b| b.unwrap().point.label.raw()).collect();
+    // Midpoint 2.85: nodes 0..=2 are nearer −0.5, nodes 3..=6 nearer 6.2.
+    assert_eq!(got, [1, 1, 1, 2, 2, 2, 2]);
+    for (i, b) in best.iter().enumerate() {
+        let b = b.unwrap();
+        assert!((b.distance - b.point.position.distance(positions[i])).abs() < 1e-15);
+    }
+    // A closed node blocks the propagation.
+    let mut best = vec![None; 7];
+    let mut open = vec![true; 7];
+    open[3] = false;
+    march::march(
+        &positions,
+        &open,
+        &neighbours,
+        [(0u32, bp(-0.5, 1))].into_iter(),
+        &mut best,
+    );
+    assert!(best[..3].iter().all(Option::is_some) && best[3..].iter().all(Option::is_none));
+}
+
+/// Two overlaps far apart: a region much sparser than its bounding box takes the hashed
+/// index, a single overlap the dense one; both list exactly the sorted corners.
+#[test]
+fn region_nodes_are_the_sorted_corners_dense_or_sparse() {
+    let pair = |x: f64, l: u32| {
+        [
+            sphere(2, DVec3::new(x - 0.4, 0.0, 0.0), 0.6, 0, l),
+            sphere(2, DVec3::new(x + 0.4, 0.0, 0.0), 0.6, 0, l + 1),
+        ]
+    };
+    let near = union(&pair(0.0, 1));
+    let far = union(&[pair(0.0, 1), pair(30.0, 3)].concat());
+    for (mesh, dense) in [(near, true), (far, false)] {
+        let r = run(&mesh, 0.2, false);
+        let (nodes, index) = region_nodes(&r.region).unwrap();
+        assert_eq!(matches!(index, NodeIndex::Dense { .. }), dense);
+        let mut want: Vec<IVec3> = r.region.cells().flat_map(cell_corners).collect();
+        want.sort_unstable_by_key(|n| [n.z, n.y, n.x]);
+        want.dedup();
+        assert_eq!(nodes, want);
+        for (i, &n) in nodes.iter().enumerate() {
+            assert_eq!(index.get(n), Some(i as u32));
+            assert_eq!(index.get(n + IVec3::new(0, 0, 1000)), None);
+        }
+        let labels = correct_labels(&mesh, &r.grid, &r.mats, &r.region).unwrap();
+        assert_eq!(labels.len(), nodes.len());
+        assert_eq!(labels.stats().unreached_nodes, 0);
+    }
+}
