@@ -29,13 +29,39 @@
 //! ([`stages::materials::order`]) and the face piercing test
 //! ([`stages::flaws::segment_pierces_face`]), so the three agree with each other.
 //!
-//! Mesh cutting (§7), replacement (§8) and the tracker itself come next; until then the
-//! facade reports the backend as unavailable ([`UNAVAILABLE`]).
+//! The whole step ([`GridTracker`], behind [`mesh_core::SurfaceTracker`]; one-shot repair
+//! and multi-material union: [`fix`] / [`fix_with`]):
+//!
+//! ```text
+//! move a copy → grid → materials → flaws → cut → labels → rebuild → transfer → improve
+//!                                  ↑_______ safety net (§9.2), sub-ℓ pass ____|
+//! ```
+//!
+//! - safety net (§9.2): a stage's local inconsistency, or a rebuilt mesh failing layers
+//!   1–3 of validation, adds its cells to the flawed region and redoes cut → rebuild from
+//!   the moved mesh, a bounded number of times ([`GridParams::max_safety_rounds`]);
+//! - sub-ℓ pass (beyond the paper, its §10): exact triangle–triangle tests of the changed
+//!   triangles against everything near them; the cells of intersecting pairs join the
+//!   region and the pass repeats, bounded ([`SubcellPass`]), so the output is free of
+//!   intersections at every scale, not only above ℓ;
+//! - improvement (§8.5) keeps edge lengths in 0.5–1.5 ℓ, on the whole mesh or only the
+//!   rebuilt parts ([`ImproveScope`]), each edit checked exactly against the rest.
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+mod fix;
+mod params;
+mod pipeline;
+mod safety;
 pub mod stages;
+mod tracker;
 
+pub use fix::{FixError, FixOptions, FixOutcome, FixReport, fix, fix_with};
+pub use params::{GridParams, ImproveScope, SubcellPass};
+pub use pipeline::{PassStats, PipelineError};
+pub use tracker::GridTracker;
+
+pub use stages::cut::{Cut, CutError, CutOptions, CutStats, cut_mesh};
 pub use stages::flaws::{
     BoundaryFace, CellFlaws, FacePoint, FaceReport, FaceScratch, FaceSegment, FlawError,
     FlawOptions, FlawStats, FlawedRegion, detect_flaws, intersect_face, segment_pierces_face,
@@ -44,13 +70,21 @@ pub use stages::grid::primitives::{GridEdge, GridFace};
 pub use stages::grid::{
     CellId, Grid, GridError, GridOptions, GridStats, Lattice, NodeId, build_grid,
 };
+pub use stages::labels::{
+    BreakingPoint, EdgeTransitions, LabelError, LabelStats, NodeLabels, correct_labels,
+};
 pub use stages::materials::{
     EdgeCrossing, MaterialError, MaterialOptions, MaterialRef, MaterialStats, MaterialVector,
     MaterialView, Materials, assign_materials,
 };
+pub use stages::rebuild::{
+    RebuildError, RebuildOptions, RebuildReport, RebuildStats, rebuild_region,
+};
+pub use stages::transfer::{OldVertices, TransferError, TransferStats, transfer_pic};
 
-/// Why this backend cannot be constructed yet; the facade reports it to the user.
-pub const UNAVAILABLE: Option<&str> = Some("the grid backend is not implemented yet (issue 4)");
+/// Why this backend cannot be constructed (`None`: it can); the facade reports it to the
+/// user.
+pub const UNAVAILABLE: Option<&str> = None;
 
 #[cfg(test)]
 mod test_util;

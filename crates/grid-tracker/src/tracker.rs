@@ -1,0 +1,284 @@
+//! [`GridTracker`]: the 2024 algorithm behind the [`SurfaceTracker`] trait.
+//!
+//! A step, as in the paper's experiments (§9: "one step of mesh deformation for one step
+//! of our topological change algorithm"):
+//!
+//! ```text
+//! check_proposal → move a copy of the mesh (relink non-manifold edges)
+//!   → pipeline (grid → materials → flaws → cut → labels → rebuild → transfer,
+//!               safety net and sub-ℓ pass, see `pipeline`)
+//!   → improve (§8.5) → validate → commit, compact
+//! ```
+//!
+//! The tracker works on a copy: any error leaves the previous mesh and attributes exactly
+//! as they were. Proposals may be arbitrarily large (teleporting shapes into each other
+//! is a boolean union): nothing in the step assumes small motion.
+
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+use glam::DVec3;
+use mesh_core::remesh::{VertexAttributes, improve::mean_edge_length};
+use mesh_core::validate::{ValidateOptions, validate};
+use mesh_core::{
+    Label, LabeledMesh, StepReport, SurfaceTracker, TopologyEvents, TrackError, TriId,
+    check_proposal,
+};
+
+use crate::params::GridParams;
+use crate::pipeline::{PassStats, Timings, improve_mesh, run_pass};
+
+/// The grid tracker (Heiss-Synak et al. 2024): lets the mesh tangle, then repairs the
+/// flawed regions from a multi-material implicit surface on a sparse background grid,
+/// leaving the rest of the mesh untouched.
+///
+/// The mesh is compacted after every step that removed anything, so vertex ids change
+/// with topology: propose positions for [`SurfaceTracker::mesh`] as it is after the last
+/// step. [`StepReport::events`] counts merges and splits per label from the number of
+/// bounded region shells before and after the step (fewer: merged, more: split; a label
+/// whose regions all vanished counts as neither); two materials forming an interface is
+/// not a merge.
+#[derive(Clone, Debug)]
+pub struct GridTracker {
+    mesh: LabeledMesh,
+    attrs: VertexAttributes,
+    params: GridParams,
+    cell_size: f64,
+    step: u64,
+    /// Bounded region shells per label of the current mesh, to count merges and splits.
+    shells: BTreeMap<Label, usize>,
+    last: Option<PassStats>,
+}
+
+/// Bounded region shells per label.
+fn shell_counts(mesh: &LabeledMesh) -> BTreeMap<Label, usize> {
+    let mut counts = BTreeMap::new();
+    for s in mesh.regions().bounded() {
+        *counts.entry(s.label).or_insert(0) += 1;
+    }
+    counts
+}
+
+/// Checks the preconditions of a tracker's or `fix`'s input: layers 1–3 of validation.
+pub(crate) fn check_input(mesh: &LabeledMesh) -> Result<(), String> {
+    let report = validate(mesh, &ValidateOptions::default());
+    if report.is_valid() {
+        Ok(())
+    } else {
+        Err(report.to_string())
+    }
+}
+
+/// Moves every vertex whose proposed position differs and re-pairs the non-manifold
+/// edges around it from the new geometry. Returns the triangles with a moved vertex.
+fn move_vertices(mesh: &mut LabeledMesh, proposed: &[DVec3]) -> Vec<TriId> {
+    let moved: Vec<_> = mesh
+        .vertices()
+        .filter(|&v| mesh.position(v) != proposed[v.idx()])
+        .collect();
+    for &v in &moved {
+        mesh.set_position(v, proposed[v.idx()]);
+    }
+    let mut tris = vec![false; mesh.triangle_capacity()];
+    for &v in &moved {
+        mesh.relink_around(v);
+        for t in mesh.vertex_triangles(v) {
+            tris[t.idx()] = true;
+        }
+    }
+    mesh.triangles().filter(|t| tris[t.idx()]).collect()
+}
+
+impl GridTracker {
+    /// A tracker for `mesh`, which must be valid (layers 1–3 of
+    /// [`mesh_core::validate`]: closed, consistently labelled, finite, no zero-area
+    /// triangle) and non-empty. ℓ is [`GridParams::cell_size`] or the mean edge length.
+    pub fn new(mesh: LabeledMesh, params: GridParams) -> Result<Self, TrackError> {
+        params.check().map_err(TrackError::InvalidInput)?;
+        if mesh.num_triangles() == 0 {
+            return Err(TrackError::InvalidInput("the mesh has no triangles".into()));
+        }
+        check_input(&mesh).map_err(TrackError::InvalidInput)?;
+        let cell_size = match params.cell_size {
+            Some(l) => l,
+            None => mean_edge_length(&mesh),
+        };
+        if !(cell_size.is_finite() && cell_size > 0.0) {
+            return Err(TrackError::InvalidInput(format!(
+                "cell size ℓ = {cell_size} (mean edge length) must be finite and > 0"
+            )));
+        }
+        let shells = shell_counts(&mesh);
+        Ok(Self {
+            mesh,
+            attrs: VertexAttributes::none(),
+            params,
+            cell_size,
+            step: 0,
+            shells,
+            last: None,
+        })
+    }
+
+    /// Per-vertex attributes (e.g. velocities) carried through steps: kept on surviving
+    /// vertices, interpolated by edits, and transferred to rebuilt vertices by PIC (§8.4).
+    /// Empty (`dim() == 0`) unless set with [`Self::set_attributes`].
+    pub fn attributes(&self) -> &VertexAttributes {
+        &self.attrs
+    }
+
+    /// Mutable attributes, indexed by the current vertex ids.
+    pub fn attributes_mut(&mut self) -> &mut VertexAttributes {
+        &mut self.attrs
+    }
+
+    /// Replaces the attributes, e.g. `VertexAttributes::zeros(tracker.mesh(), 3)`.
+    pub fn set_attributes(&mut self, attrs: VertexAttributes) {
+        self.attrs = attrs;
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &GridParams {
+        &self.params
+    }
+
+    /// The cell size ℓ in use.
+    pub fn cell_size(&self) -> f64 {
+        self.cell_size
+    }
+
+    /// Steps completed.
+    pub fn steps(&self) -> u64 {
+        self.step
+    }
+
+    /// What the last successful step's pipeline pass did (flawed cells, safety-net and
+    /// sub-ℓ rounds, triangles replaced).
+    pub fn last_pass(&self) -> Option<&PassStats> {
+        self.last.as_ref()
+    }
+
+    /// The step on a copy; `Ok` carries everything to commit.
+    fn step_on_copy(
+        &self,
+        proposed: &[DVec3],
+        timings: &mut Timings,
+    ) -> Result<(LabeledMesh, VertexAttributes, PassStats, u64), TrackError> {
+        let mut moved = self.mesh.clone();
+        let changed = timings.time("move", || move_vertices(&mut moved, proposed));
+        let seed = self.params.step_seed(self.step);
+        let pass = run_pass(
+            moved,
+            &self.attrs,
+            Some(&changed),
+            &self.params,
+            self.cell_size,
+            seed,
+            timings,
+        )
+        .map_err(|e| TrackError::StageFailed {
+            stage: e.stage(),
+            reason: e.to_string(),
+        })?;
+        let (mut mesh, mut attrs) = (pass.mesh, pass.attrs);
+        let mut edits = 0u64;
+        if let Some(ip) = &self.params.improve {
+            let report = timings.time("improve", || {
+                improve_mesh(
+                    &mut mesh,
+                    &mut attrs,
+                    &self.params,
+                    ip,
+                    self.cell_size,
+                    &pass.created,
+                )
+            });
+            if let Some(r) = report {
+                edits = (r.split.done
+                    + r.collapse.done
+                    + r.flip.done
+                    + r.smooth.done
+                    + r.separations
+                    + r.pinched) as u64;
+            }
+        }
+        if self.params.validate_each_step {
+            let report = timings.time("validate", || validate(&mesh, &ValidateOptions::default()));
+            if !report.is_valid() {
+                return Err(TrackError::StageFailed {
+                    stage: "validate",
+                    reason: report.to_string(),
+                });
+            }
+        }
+        Ok((mesh, attrs, pass.stats, edits))
+    }
+}
+
+/// Drops dead slots (if any), carrying the attributes along.
+fn compact(mesh: &mut LabeledMesh, attrs: &mut VertexAttributes) {
+    if mesh.num_vertices() == mesh.vertex_capacity()
+        && mesh.num_triangles() == mesh.triangle_capacity()
+    {
+        return;
+    }
+    let map = mesh.compact();
+    if attrs.dim() > 0 {
+        let mut out = VertexAttributes::zeros(mesh, attrs.dim());
+        for (old, new) in map.vertex_map.iter().enumerate() {
+            if let Some(new) = new {
+                out.get_mut(*new)
+                    .copy_from_slice(attrs.get(mesh_core::VertexId::new(old as u32)));
+            }
+        }
+        *attrs = out;
+    }
+}
+
+impl SurfaceTracker for GridTracker {
+    fn name(&self) -> &str {
+        "grid"
+    }
+
+    fn mesh(&self) -> &LabeledMesh {
+        &self.mesh
+    }
+
+    fn advance(&mut self, proposed: &[DVec3]) -> Result<StepReport, TrackError> {
+        check_proposal(&self.mesh, proposed)?;
+        let mut timings = Timings::default();
+        let (mut mesh, mut attrs, stats, edits) = self.step_on_copy(proposed, &mut timings)?;
+        let start = Instant::now();
+        compact(&mut mesh, &mut attrs);
+        let shells = shell_counts(&mesh);
+        timings.add("commit", start.elapsed());
+        let mut events = TopologyEvents {
+            remeshing_edits: edits,
+            ..TopologyEvents::default()
+        };
+        let labels: std::collections::BTreeSet<Label> =
+            self.shells.keys().chain(shells.keys()).copied().collect();
+        for l in labels {
+            let before = self.shells.get(&l).copied().unwrap_or(0) as i64;
+            let after = shells.get(&l).copied().unwrap_or(0) as i64;
+            // A label whose regions all vanished (shrunk away) did not merge.
+            if after < before && after > 0 {
+                events.merges += (before - after) as u64;
+            } else if after > before {
+                events.splits += (after - before) as u64;
+            }
+        }
+        self.mesh = mesh;
+        self.attrs = attrs;
+        self.shells = shells;
+        self.step += 1;
+        self.last = Some(stats);
+        Ok(StepReport {
+            stages: timings.into_stages(),
+            events,
+            vertices: self.mesh.num_vertices(),
+            triangles: self.mesh.num_triangles(),
+            substeps: 1,
+        })
+    }
+}
