@@ -77,6 +77,14 @@ pub enum BackendError {
     /// No backend has this name.
     #[error("unknown tracker backend `{0}` (choose `grid` or `collision`)")]
     Unknown(String),
+    /// The backend rejected the initial mesh.
+    #[error("tracker backend `{backend}` rejected the mesh: {error}")]
+    InvalidInput {
+        /// The backend.
+        backend: Backend,
+        /// Its reason.
+        error: TrackError,
+    },
     /// The backend exists but cannot be constructed in this build.
     #[error("tracker backend `{backend}` is unavailable: {reason}")]
     Unavailable {
@@ -87,15 +95,56 @@ pub enum BackendError {
     },
 }
 
-/// Makes a tracker of the chosen backend around an initial mesh.
+/// Backend-independent knobs of [`make_tracker_with`]; everything else takes the
+/// backend's documented defaults (`GridParams`, `CollisionParams`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TrackerOptions {
+    /// The length scale: the grid backend's cell size ℓ, the collision backend's target
+    /// edge length. Default `None`: the mean edge length of the initial mesh.
+    pub length_scale: Option<f64>,
+    /// Seed of any randomness in the backend (the grid backend's per-step grid shifts).
+    pub seed: u64,
+    /// Run `validate()` after every step (the step fails rather than return an invalid
+    /// mesh). Default `None`: the backend's default (on in debug builds).
+    pub validate_each_step: Option<bool>,
+}
+
+/// Makes a tracker of the chosen backend around an initial mesh, with default parameters.
 pub fn make_tracker(
     backend: Backend,
     mesh: LabeledMesh,
 ) -> Result<Box<dyn SurfaceTracker>, BackendError> {
-    let _ = mesh;
-    match backend.unavailable_reason() {
-        Some(reason) => Err(BackendError::Unavailable { backend, reason }),
-        None => Err(BackendError::Unavailable {
+    make_tracker_with(backend, mesh, &TrackerOptions::default())
+}
+
+/// Makes a tracker of the chosen backend around an initial mesh.
+///
+/// Errors: the backend is unavailable in this build, or the mesh is not a valid input
+/// for it (open, inconsistently labelled, non-finite; self-intersecting for the
+/// collision backend), with the backend's own explanation.
+pub fn make_tracker_with(
+    backend: Backend,
+    mesh: LabeledMesh,
+    options: &TrackerOptions,
+) -> Result<Box<dyn SurfaceTracker>, BackendError> {
+    if let Some(reason) = backend.unavailable_reason() {
+        return Err(BackendError::Unavailable { backend, reason });
+    }
+    let invalid = |e: TrackError| BackendError::InvalidInput { backend, error: e };
+    match backend {
+        Backend::Grid => {
+            let mut params = grid_tracker::GridParams {
+                cell_size: options.length_scale,
+                seed: options.seed,
+                ..Default::default()
+            };
+            if let Some(v) = options.validate_each_step {
+                params.validate_each_step = v;
+            }
+            let tracker = grid_tracker::GridTracker::new(mesh, params).map_err(invalid)?;
+            Ok(Box::new(tracker))
+        }
+        Backend::Collision => Err(BackendError::Unavailable {
             backend,
             reason: "not wired",
         }),

@@ -3,9 +3,24 @@
 //! How users meet the project: built-in scenes, flows that propose vertex motion, the
 //! statistical robustness benchmark, and the `surftrack` command line (`src/main.rs`,
 //! defined in [`cli`]).
+//!
+//! | module | what |
+//! |---|---|
+//! | [`flows`] | vertex proposals: normal, Enright, curl noise, rotation, mean curvature, cyclic, one-shot |
+//! | [`scenes`] | built-in scenes: initial mesh + flow + time step ([`scenes::build_tracked`]) |
+//! | [`driver`] | one scene through one backend in this process ([`driver::run_scene`]) |
+//! | [`isolate`] | the same in a child process under a watchdog (time-out, memory cap) |
+//! | [`bench`](mod@bench) | the robustness benchmark (2024 paper §9.6) and the backend comparison |
+//! | [`record`] | the JSON records (`run.json`, `robustness.json`, `compare.json`) and shard merging |
+//! | [`report`] | markdown tables and SVG plots |
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+pub mod bench;
 pub mod cli;
+pub mod driver;
 pub mod flows;
+pub mod isolate;
+pub mod record;
+pub mod report;
 pub mod scenes;

@@ -1,7 +1,8 @@
-//! `surftrack`: generate scenes, validate and convert meshes, run trackers.
+//! `surftrack`: run built-in scenes through the tracker backends, benchmark them,
+//! generate, validate and convert meshes.
 //!
-//! Exit codes: 0 success (and, for `validate`, a valid mesh), 1 an invalid mesh, 2 unreadable
-//! input or a usage error.
+//! Exit codes: 0 success (and, for `validate`, a valid mesh), 1 an invalid mesh or a failed
+//! run, 2 unreadable input or a usage error, 3 the requested backend is unavailable.
 
 use std::process::ExitCode;
 

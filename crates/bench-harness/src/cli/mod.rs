@@ -1,22 +1,50 @@
 //! The `surftrack` command line: argument definitions and dispatch. Each subcommand lives
 //! in its own module and returns the process exit code.
+//!
+//! Exit codes: 0 success; 1 an invalid mesh (`validate`) or a failed run (`run`); 2 a usage
+//! or I/O error; 3 the requested backend is unavailable in this build (`run`).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand};
+use surftrack::Backend;
 
+use crate::bench::{Shard, Simulate};
+
+mod bench;
 mod convert;
+mod fix;
 mod generate;
+mod output;
+mod run;
+mod scenes;
 mod validate;
 
-/// Multi-material surface tracking: generate scenes, validate and convert labelled meshes.
+const MAIN_EXAMPLES: &str = "\
+Examples:
+  surftrack scenes                                     # what can be run
+  surftrack run double-bubble --steps 60 --out out/db  # frames + run.json + plots in out/db
+  surftrack run spheres --spheres 20 --seed 1 --steps 40 --tracker grid
+  surftrack bench robustness --spheres 20 --seeds 10 --tracker grid --out out/rb
+  surftrack bench compare double-bubble zalesak --steps 20
+  surftrack validate out/db/frame_0060.ply --intersections
+
+Logs: set RUST_LOG (error, warn, info, debug, trace; or per target, e.g.
+RUST_LOG=bench_harness=debug) to see them on stderr. Progress bars show on a terminal
+unless --quiet.
+
+Exit codes: 0 success; 1 invalid mesh or failed run; 2 usage or I/O error; 3 backend
+unavailable in this build.";
+
+/// Multi-material surface tracking: run built-in scenes through a tracker backend,
+/// benchmark the backends, generate, validate and convert labelled meshes.
 ///
 /// Meshes are triangle meshes whose every triangle separates two materials
 /// (`label_front`, `label_back`; 0 is the outside). PLY files carry the labels as face
 /// properties; OBJ files as `usemtl label_<front>_<back>` groups.
 #[derive(Debug, Parser)]
-#[command(name = "surftrack", version, about, long_about = None)]
+#[command(name = "surftrack", version, about, long_about = None, after_long_help = MAIN_EXAMPLES)]
 pub struct Cli {
     /// What to do.
     #[command(subcommand)]
@@ -37,12 +65,308 @@ pub enum Command {
     Validate(ValidateArgs),
     /// Convert between PLY (ASCII or binary) and OBJ, keeping labels.
     Convert(ConvertArgs),
+    /// Run a built-in scene through a tracker: frames (PLY with labels), `run.json`, plots.
+    ///
+    /// Every step the scene's flow proposes new vertex positions, the tracker advances and
+    /// the result is checked with `validate()`. The run stops at the first tracker error,
+    /// panic, invalid mesh or triangle-cap excess and says which in `run.json`.
+    Run(RunArgs),
+    /// Benchmarks: robustness statistics (2024 paper §9.6), merging shards, comparing
+    /// backends.
+    Bench(BenchArgs),
+    /// List the built-in scenes, one line each.
+    Scenes(ScenesArgs),
+    /// Repair a mesh, or unite overlapping labelled meshes, in one shot (grid backend).
+    ///
+    /// The input may overlap itself anywhere and by any amount (e.g. rotated copies of a
+    /// mesh, each with its own label); the output is watertight, consistently labelled and
+    /// free of self-intersections. Only triangles in flawed grid cells change.
+    ///
+    /// Exit code 0 when the output is valid, 1 when the repair failed, 2 when the input
+    /// cannot be read.
+    #[command(after_long_help = FIX_EXAMPLES)]
+    Fix(FixArgs),
+}
+
+const FIX_EXAMPLES: &str = "\
+Examples:
+  surftrack generate copies --count 6 --out out/copies.ply
+  surftrack fix out/copies.ply out/union.ply --json
+  surftrack fix scan.obj scan_fixed.ply --cell 0.01
+
+--json prints a record (schema surftrack.fix/1): input, output, valid, and the report:
+stages [{stage, seconds}], cell_size, triangles_in, triangles_out, untouched_fraction,
+flawed_cells, safety_rounds, subcell_rounds, subcell_pairs, improve_edits, validation.";
+
+/// Arguments of `surftrack fix`.
+#[derive(Debug, Args)]
+pub struct FixArgs {
+    /// Input mesh (.ply or .obj; unlabelled closed meshes are read as inside 1 / outside 0).
+    pub input: PathBuf,
+    /// Output mesh (.ply or .obj).
+    pub output: PathBuf,
+    /// Grid cell size ℓ: overlaps and features smaller than ℓ are resolved by remeshing.
+    /// Default: the mean edge length of the input.
+    #[arg(long)]
+    pub cell: Option<f64>,
+    /// Print the JSON record instead of a summary.
+    #[arg(long)]
+    pub json: bool,
+    /// Write binary PLY.
+    #[arg(long)]
+    pub binary: bool,
+    /// Skip the exact self-intersection check of the output (faster on huge meshes).
+    #[arg(long)]
+    pub no_intersection_check: bool,
+}
+
+const RUN_EXAMPLES: &str = "\
+Examples:
+  surftrack run double-bubble --steps 60 --out out/db --json
+  surftrack run spheres --spheres 20 --seed 1 --steps 40 --tracker grid
+  surftrack run enright --resolution 16 --every 10 --tracker collision
+  surftrack run copies --mesh bunny.ply --count 3
+
+Output (in --out, default out/<scene>-<tracker>): frame_0000.ply (the initial mesh),
+then every --every steps and the last step; run.json (schema surftrack.run/1:
+scene, tracker, seed, steps, success, failure {reason, message, step}, wall_seconds,
+peak_triangles, events, stage_seconds, per_step [...]); time_per_step.svg and
+triangles_per_step.svg.
+
+Failure reasons: unavailable, error, panic, invalid, memory (--max-triangles).
+Exit codes: 0 success, 1 the run failed, 2 usage or I/O error, 3 backend unavailable.";
+
+/// Scene parameters shared by `run` and the benchmarks; unset means the scene's default
+/// (see `surftrack scenes --long`).
+#[derive(Debug, Args, Clone, Default)]
+pub struct SceneArgs {
+    /// Spheres (`spheres`), cells (`foam`) or copies (`copies`).
+    #[arg(long = "count", short = 'n', visible_alias = "spheres")]
+    pub count: Option<usize>,
+    /// Resolution; its meaning depends on the scene (`surftrack scenes --long`).
+    #[arg(long)]
+    pub resolution: Option<u32>,
+    /// Radius (`double-bubble`, `inversion`, `cyclic`).
+    #[arg(long)]
+    pub radius: Option<f64>,
+    /// Input mesh for `copies` (.ply or .obj).
+    #[arg(long)]
+    pub mesh: Option<PathBuf>,
+}
+
+/// Arguments of `surftrack run`.
+#[derive(Debug, Args)]
+#[command(after_long_help = RUN_EXAMPLES)]
+pub struct RunArgs {
+    /// The scene (`surftrack scenes` lists them).
+    pub scene: String,
+    /// Tracker backend: `grid` (Heiss-Synak et al. 2024) or `collision` (Los Topos).
+    #[arg(long, short = 't', default_value = "grid")]
+    pub tracker: Backend,
+    /// Number of steps (default: the scene's).
+    #[arg(long)]
+    pub steps: Option<usize>,
+    /// Time step (default: the scene's).
+    #[arg(long)]
+    pub dt: Option<f64>,
+    /// Random seed (sphere placement, noise, Voronoi sites, rotations).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Output directory for frames, run.json and plots (default: `out/<scene>-<tracker>`).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Write a frame every N steps (plus the initial and the last); 0 writes none.
+    #[arg(long, default_value_t = 1)]
+    pub every: usize,
+    /// Write ASCII PLY frames instead of binary.
+    #[arg(long)]
+    pub ascii: bool,
+    /// Also check every step for exact self-intersections (slower).
+    #[arg(long)]
+    pub check_intersections: bool,
+    /// Fail the run (reason `memory`) when a step leaves more triangles than this.
+    #[arg(long)]
+    pub max_triangles: Option<usize>,
+    /// Print the run record as JSON on stdout instead of a summary.
+    #[arg(long)]
+    pub json: bool,
+    /// No progress bar and no summary (errors still go to stderr).
+    #[arg(long, short = 'q')]
+    pub quiet: bool,
+    /// Scene parameters.
+    #[command(flatten)]
+    pub scene_args: SceneArgs,
+    /// Test hook: misbehave instead of running (hang, panic).
+    #[arg(long, hide = true)]
+    pub simulate: Option<Simulate>,
+}
+
+/// Arguments of `surftrack bench`.
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Which benchmark.
+    #[command(subcommand)]
+    pub command: BenchCommand,
+}
+
+/// The benchmarks.
+#[derive(Debug, Subcommand)]
+pub enum BenchCommand {
+    /// The statistical robustness benchmark: N random spheres expanding under normal
+    /// flow, M seeds, each run isolated in a child process with a time limit and a
+    /// memory guard.
+    ///
+    /// Success per run (2024 paper §9.6): no panic, error, time-out or memory blow-up,
+    /// and every step's mesh passes `validate()`.
+    Robustness(RobustnessArgs),
+    /// Merge the outputs of sharded `bench robustness` runs into one table.
+    Merge(MergeArgs),
+    /// Run scenes with every backend side by side and tabulate time, triangles and events.
+    Compare(CompareArgs),
+}
+
+const ROBUSTNESS_EXAMPLES: &str = "\
+Examples:
+  surftrack bench robustness --spheres 20 --seeds 10 --tracker grid --out out/rb
+  surftrack bench robustness --spheres 100 --seeds 10 --jobs 2 --json
+  # on a cluster, one shard per array task, then merge:
+  surftrack bench robustness --spheres 100 --seeds 100 --shard $TASK/10 --out out/rb/shard-$TASK
+  surftrack bench merge out/rb/shard-* --out out/rb/all
+
+Output (in --out): robustness.json (schema surftrack.robustness/1: config, runs, summary
+per tracker with runs, successes, success_rate, mean/median/max_seconds), report.md,
+time_per_step.svg, triangles_per_step.svg, success_rate.svg, and runs/<tracker>-seed-<s>/
+with each child's run.json and child.log.
+
+Seeds are first-seed, first-seed+1, ...; shard I/N (0 <= I < N) takes the seeds at
+positions I, I+N, I+2N, ... of that list. Times in the table are of successful runs.";
+
+/// Arguments of `surftrack bench robustness`.
+#[derive(Debug, Args)]
+#[command(after_long_help = ROBUSTNESS_EXAMPLES)]
+pub struct RobustnessArgs {
+    /// Spheres per run.
+    #[arg(long, default_value_t = 20)]
+    pub spheres: usize,
+    /// Number of seeds (runs per backend).
+    #[arg(long, default_value_t = 10)]
+    pub seeds: usize,
+    /// First seed.
+    #[arg(long, default_value_t = 1)]
+    pub first_seed: u64,
+    /// Backends to run (repeat or comma-separate; default: all).
+    #[arg(long, short = 't', value_delimiter = ',')]
+    pub tracker: Vec<Backend>,
+    /// Steps per run.
+    #[arg(long, default_value_t = 40)]
+    pub steps: usize,
+    /// Time limit per run, seconds (the child is killed after it).
+    #[arg(long, default_value_t = 1800.0)]
+    pub timeout: f64,
+    /// Children running at once.
+    #[arg(long, short = 'j', default_value_t = 1)]
+    pub jobs: usize,
+    /// Run only shard I of N (0-based), e.g. `--shard 0/4`.
+    #[arg(long)]
+    pub shard: Option<Shard>,
+    /// Output directory (default: out/robustness, or out/robustness/shard-I with --shard).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Memory guard: a run whose mesh exceeds this many triangles fails with `memory`.
+    #[arg(long, default_value_t = 2_000_000)]
+    pub max_triangles: usize,
+    /// Memory guard: a child above this resident memory (MiB, Linux) is killed; 0 = off.
+    #[arg(long, default_value_t = 8192)]
+    pub max_memory_mib: u64,
+    /// Keep frames of every run, every N steps (0: none).
+    #[arg(long, default_value_t = 0)]
+    pub every: usize,
+    /// Print the per-backend summary as JSON instead of the table.
+    #[arg(long)]
+    pub json: bool,
+    /// No progress bar.
+    #[arg(long, short = 'q')]
+    pub quiet: bool,
+    /// Test hook passed to every child (hang, panic).
+    #[arg(long, hide = true)]
+    pub simulate: Option<Simulate>,
+}
+
+/// Arguments of `surftrack bench merge`.
+#[derive(Debug, Args)]
+#[command(
+    after_long_help = "Example:\n  surftrack bench merge out/rb/shard-0 out/rb/shard-1 --out out/rb/all\n\nEach input is a directory holding robustness.json (or the file itself). The shards must come from the same benchmark parameters; a seed present twice is an error."
+)]
+pub struct MergeArgs {
+    /// Shard output directories (or their robustness.json files).
+    #[arg(required = true)]
+    pub inputs: Vec<PathBuf>,
+    /// Where the merged robustness.json, report.md and plots go.
+    #[arg(long, default_value = "out/robustness-merged")]
+    pub out: PathBuf,
+    /// Print the per-backend summary as JSON instead of the table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Arguments of `surftrack bench compare`.
+#[derive(Debug, Args)]
+#[command(
+    after_long_help = "Examples:\n  surftrack bench compare                       # every scene, default steps\n  surftrack bench compare double-bubble spheres --steps 10 --jobs 2\n\nOutput (in --out, default out/compare): compare.json (schema surftrack.compare/1), compare.md, and <scene>-<tracker>/ per run."
+)]
+pub struct CompareArgs {
+    /// Scenes (default: every tracked scene).
+    pub scenes: Vec<String>,
+    /// Steps per scene (default: each scene's).
+    #[arg(long)]
+    pub steps: Option<usize>,
+    /// Seed of every scene.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Count for scenes that have one (spheres, cells, copies).
+    #[arg(long = "count", short = 'n', visible_alias = "spheres")]
+    pub count: Option<usize>,
+    /// Backends (repeat or comma-separate; default: all).
+    #[arg(long, short = 't', value_delimiter = ',')]
+    pub tracker: Vec<Backend>,
+    /// Time limit per run, seconds.
+    #[arg(long, default_value_t = 600.0)]
+    pub timeout: f64,
+    /// Children running at once.
+    #[arg(long, short = 'j', default_value_t = 1)]
+    pub jobs: usize,
+    /// Output directory.
+    #[arg(long, default_value = "out/compare")]
+    pub out: PathBuf,
+    /// Keep frames every N steps (0: none).
+    #[arg(long, default_value_t = 0)]
+    pub every: usize,
+    /// Memory guard: triangle cap per run.
+    #[arg(long, default_value_t = 2_000_000)]
+    pub max_triangles: usize,
+    /// Memory guard: resident memory cap per child, MiB (Linux); 0 = off.
+    #[arg(long, default_value_t = 8192)]
+    pub max_memory_mib: u64,
+    /// Print compare.json on stdout instead of the table.
+    #[arg(long)]
+    pub json: bool,
+    /// No progress bar.
+    #[arg(long, short = 'q')]
+    pub quiet: bool,
+}
+
+/// Arguments of `surftrack scenes`.
+#[derive(Debug, Args)]
+pub struct ScenesArgs {
+    /// Also show each scene's default steps and parameters.
+    #[arg(long)]
+    pub long: bool,
 }
 
 /// Arguments of `surftrack generate`.
 #[derive(Debug, Args)]
 pub struct GenerateArgs {
-    /// The scene: sphere, spheres, double-bubble, zalesak, foam, copies.
+    /// The scene: any of `surftrack scenes`, or `sphere`.
     pub scene: String,
     /// Output file (.ply or .obj).
     #[arg(long)]
@@ -53,11 +377,11 @@ pub struct GenerateArgs {
     /// Number of spheres (`spheres`), cells (`foam`) or copies (`copies`).
     #[arg(long, short = 'n')]
     pub count: Option<usize>,
-    /// Resolution: icosphere subdivisions (`sphere`, `spheres`), segments around the triple
-    /// curve (`double-bubble`), grid cells per axis (`zalesak`).
+    /// Resolution: as `surftrack scenes --long` says, except `double-bubble`, written
+    /// merged (two bubbles and their wall): segments around the triple curve (48).
     #[arg(long)]
     pub resolution: Option<u32>,
-    /// Sphere radius (`sphere`, `double-bubble`).
+    /// Sphere radius (`sphere`, `double-bubble`, `inversion`, `cyclic`).
     #[arg(long)]
     pub radius: Option<f64>,
     /// Input mesh for `copies`.
@@ -116,11 +440,131 @@ fn write_mesh_file(
     Ok(())
 }
 
-/// Runs a parsed command line, returning the exit code.
+/// Runs a parsed command line, returning the exit code. Sets up logging (`RUST_LOG`) on
+/// stderr first.
 pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
+    output::init_logging();
     match cli.command {
         Command::Generate(args) => generate::run(&args),
         Command::Validate(args) => validate::run(&args),
         Command::Convert(args) => convert::run(&args),
+        Command::Run(args) => run::run(&args),
+        Command::Bench(args) => match args.command {
+            BenchCommand::Robustness(args) => bench::robustness(&args),
+            BenchCommand::Merge(args) => bench::merge(&args),
+            BenchCommand::Compare(args) => bench::compare(&args),
+        },
+        Command::Scenes(args) => scenes::run(&args),
+        Command::Fix(args) => fix::run(&args),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(args: &[&str]) -> Result<Cli, clap::Error> {
+        Cli::try_parse_from(std::iter::once("surftrack").chain(args.iter().copied()))
+    }
+
+    #[test]
+    fn run_has_documented_defaults_and_the_spheres_alias() {
+        let Command::Run(run) = parse(&["run", "spheres", "--spheres", "20"])
+            .unwrap()
+            .command
+        else {
+            panic!("not run")
+        };
+        assert_eq!(run.tracker, Backend::Grid);
+        assert_eq!((run.seed, run.every, run.steps), (1, 1, None));
+        assert_eq!(run.scene_args.count, Some(20));
+        assert!(!run.json && !run.quiet && run.simulate.is_none());
+        let Command::Run(run) = parse(&[
+            "run",
+            "double-bubble",
+            "-t",
+            "collision",
+            "--steps",
+            "60",
+            "--out",
+            "o",
+            "--json",
+        ])
+        .unwrap()
+        .command
+        else {
+            panic!("not run")
+        };
+        assert_eq!(run.tracker, Backend::Collision);
+        assert_eq!(run.steps, Some(60));
+        assert_eq!(run.out, Some(PathBuf::from("o")));
+        assert!(run.json);
+        assert!(parse(&["run", "spheres", "--tracker", "levelset"]).is_err());
+        assert!(parse(&["run"]).is_err());
+    }
+
+    #[test]
+    fn bench_commands_parse_trackers_shards_and_inputs() {
+        let cli = parse(&[
+            "bench",
+            "robustness",
+            "--spheres",
+            "100",
+            "--seeds",
+            "10",
+            "--tracker",
+            "grid,collision",
+            "--shard",
+            "1/4",
+            "--jobs",
+            "2",
+            "--timeout",
+            "60",
+            "--json",
+        ])
+        .unwrap();
+        let Command::Bench(BenchArgs {
+            command: BenchCommand::Robustness(r),
+        }) = cli.command
+        else {
+            panic!("not robustness")
+        };
+        assert_eq!((r.spheres, r.seeds, r.jobs, r.steps), (100, 10, 2, 40));
+        assert_eq!(r.tracker, vec![Backend::Grid, Backend::Collision]);
+        assert_eq!(r.shard, Some(Shard { index: 1, count: 4 }));
+        assert_eq!(r.timeout, 60.0);
+        assert!(r.json);
+        assert!(parse(&["bench", "robustness", "--shard", "4/4"]).is_err());
+        assert!(parse(&["bench", "merge"]).is_err(), "merge needs inputs");
+        let Command::Bench(BenchArgs {
+            command: BenchCommand::Merge(m),
+        }) = parse(&["bench", "merge", "a", "b", "--out", "m"])
+            .unwrap()
+            .command
+        else {
+            panic!("not merge")
+        };
+        assert_eq!(m.inputs, vec![PathBuf::from("a"), PathBuf::from("b")]);
+        let Command::Bench(BenchArgs {
+            command: BenchCommand::Compare(c),
+        }) = parse(&["bench", "compare", "zalesak", "cyclic", "--steps", "5"])
+            .unwrap()
+            .command
+        else {
+            panic!("not compare")
+        };
+        assert_eq!(c.scenes, vec!["zalesak", "cyclic"]);
+        assert!(c.tracker.is_empty(), "default: every backend");
+    }
+
+    #[test]
+    fn hidden_hooks_stay_out_of_the_help() {
+        use clap::CommandFactory;
+        let mut cmd = Cli::command();
+        let run = cmd.find_subcommand_mut("run").unwrap();
+        let help = run.render_long_help().to_string();
+        assert!(help.contains("Examples:") && help.contains("--tracker"));
+        assert!(!help.contains("simulate"));
+        cmd.debug_assert();
     }
 }

@@ -19,7 +19,8 @@
 //!   the surface itself and take one forward Euler step.
 //!
 //! [`Schedule`] chains flows in time (the double bubble grows then shrinks; the
-//! curl-noise scene alternates normal flow and noise).
+//! curl-noise scene alternates normal flow and noise); [`OneShot`] and
+//! [`TargetPositions`] deform everything in the first step (the inversion and copies tests).
 //!
 //! The submodules document each flow's conventions in full (sign of speeds, behaviour at
 //! non-manifold vertices, stability); the types are re-exported here.
@@ -35,6 +36,7 @@ pub mod error;
 mod lsq;
 pub mod mean_curvature;
 pub mod normal;
+pub mod one_shot;
 pub mod rigid;
 pub mod schedule;
 pub mod speeds;
@@ -51,6 +53,7 @@ pub use enright::EnrightFlow;
 pub use error::FlowError;
 pub use mean_curvature::{MeanCurvatureFlow, area_gradient_and_mixed_area};
 pub use normal::{JunctionRule, NormalFlow, NormalScheme};
+pub use one_shot::{OneShot, TargetPositions};
 pub use rigid::RigidRotation;
 pub use schedule::Schedule;
 pub use speeds::InterfaceSpeeds;

@@ -1,0 +1,152 @@
+//! `surftrack run SCENE`: one scene through one backend, frames and a record on disk.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Duration;
+
+use anyhow::Context;
+
+use crate::bench::Simulate;
+use crate::driver::{RunConfig, run_scene};
+use crate::isolate::{EXIT_RUN_FAILED, EXIT_UNAVAILABLE};
+use crate::record::{FailureReason, RunRecord};
+use crate::report::{run_plots, write_files};
+use crate::scenes::SceneOptions;
+
+use super::{RunArgs, SceneArgs, output};
+
+/// Longest a simulated hang sleeps: long past any test's watchdog, short enough that a
+/// forgotten child goes away by itself.
+const HANG_LIMIT: Duration = Duration::from_secs(600);
+
+/// Scene options from the command line (reading `--mesh` if given).
+pub(super) fn scene_options(args: &SceneArgs, seed: u64) -> anyhow::Result<SceneOptions> {
+    let mesh = match &args.mesh {
+        Some(path) => Some(
+            mesh_core::io::read_mesh(path)
+                .with_context(|| format!("reading --mesh {}", path.display()))?,
+        ),
+        None => None,
+    };
+    Ok(SceneOptions {
+        seed,
+        count: args.count,
+        resolution: args.resolution,
+        radius: args.radius,
+        mesh,
+    })
+}
+
+/// Writes `run.json` into `dir`.
+pub(super) fn write_record(dir: &Path, record: &RunRecord) -> anyhow::Result<PathBuf> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let path = dir.join("run.json");
+    let text = serde_json::to_string_pretty(record)?;
+    std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
+    Ok(path)
+}
+
+fn simulate(what: Simulate) {
+    match what {
+        Simulate::Hang => {
+            let start = std::time::Instant::now();
+            while start.elapsed() < HANG_LIMIT {
+                std::thread::sleep(Duration::from_millis(100));
+            }
+        }
+        Simulate::Panic => panic!("simulated panic (--simulate panic)"),
+    }
+}
+
+pub(super) fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
+    if let Some(what) = args.simulate {
+        simulate(what);
+    }
+    let out = args.out.clone().unwrap_or_else(|| {
+        PathBuf::from("out").join(format!("{}-{}", args.scene, args.tracker.name()))
+    });
+    let config = RunConfig {
+        scene: args.scene.clone(),
+        options: scene_options(&args.scene_args, args.seed)?,
+        backend: args.tracker,
+        steps: args.steps,
+        dt: args.dt,
+        every: args.every,
+        out: Some(out.clone()),
+        ascii: args.ascii,
+        max_triangles: args.max_triangles,
+        check_intersections: args.check_intersections,
+    };
+    let progress = output::progress_bar(args.quiet || args.json, 0, &args.scene);
+    let record = run_scene(&config, &progress)?;
+    progress.finish_and_clear();
+    let record_path = write_record(&out, &record)?;
+    if !record.per_step.is_empty() {
+        write_files(&out, &run_plots(&record))
+            .with_context(|| format!("writing plots to {}", out.display()))?;
+    }
+
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&record)?);
+    } else if !args.quiet {
+        print_summary(&record, &out, &record_path);
+    }
+    let code = match &record.failure {
+        None => ExitCode::SUCCESS,
+        Some(f) if f.reason == FailureReason::Unavailable => {
+            if args.quiet || args.json {
+                eprintln!("error: {}", f.message);
+            }
+            ExitCode::from(EXIT_UNAVAILABLE)
+        }
+        Some(_) => ExitCode::from(EXIT_RUN_FAILED),
+    };
+    Ok(code)
+}
+
+fn print_summary(record: &RunRecord, out: &Path, record_path: &Path) {
+    let per_step = if record.steps_completed > 0 {
+        record.per_step.iter().map(|s| s.seconds).sum::<f64>() / record.steps_completed as f64
+    } else {
+        0.0
+    };
+    match &record.failure {
+        None => println!(
+            "{} with {}: {} steps in {:.2} s ({:.3} s/step), {} → {} triangles (peak {}), \
+             {} merges, {} splits, every frame valid",
+            record.scene,
+            record.tracker,
+            record.steps_completed,
+            record.wall_seconds,
+            per_step,
+            record.initial.triangles,
+            record
+                .per_step
+                .last()
+                .map_or(record.initial.triangles, |s| s.triangles),
+            record.peak_triangles,
+            record.events.merges,
+            record.events.splits,
+        ),
+        Some(f) => println!(
+            "{} with {}: FAILED ({}) after {} of {} steps: {}",
+            record.scene,
+            record.tracker,
+            f.reason,
+            record.steps_completed,
+            record.steps,
+            f.message.lines().next().unwrap_or("")
+        ),
+    }
+    match (record.frames.first(), record.frames.last()) {
+        (Some(first), Some(last)) if record.frames.len() > 1 => println!(
+            "frames: {} … {} ({} files)",
+            out.join(&first.file).display(),
+            out.join(&last.file).display(),
+            record.frames.len()
+        ),
+        (Some(only), _) => println!("frame: {}", out.join(&only.file).display()),
+        _ => println!("frames: none written"),
+    }
+    println!("record: {}", record_path.display());
+}

@@ -1,0 +1,500 @@
+//! Built-in scenes: an initial mesh, a flow, a time step and a default number of steps —
+//! everything `surftrack run` needs, no input files. [`build_tracked`] makes a tracked
+//! scene; [`build_scene`] the mesh `surftrack generate` writes.
+//!
+//! | scene | what it tests (paper) |
+//! |---|---|
+//! | `double-bubble` | two spheres expand, merge into a double bubble, reverse, separate and vanish (2024 §9.6, Fig. 18) |
+//! | `spheres` | N random non-overlapping spheres under naive normal flow: the robustness benchmark (2024 §9.6) |
+//! | `zalesak` | the notched sphere turned once about an outside point (Los Topos §8.1) |
+//! | `enright` | a sphere of four materials through the Enright field, there and back (Los Topos Fig. 14) |
+//! | `curl-noise` | four spheres under alternating normal flow and curl noise (Los Topos Fig. 15) |
+//! | `foam` | Voronoi cells under mean curvature flow (Los Topos Fig. 17) |
+//! | `inversion` | a double bubble thrown into self-intersection by strong smooth noise, fixed in one step (2024 Fig. 15) |
+//! | `copies` | k rotated copies of a mesh teleported onto each other, one step (2024 Fig. 16) |
+//! | `cyclic` | cyclical normal flow a→b→c→a around a still triple curve (Los Topos Fig. 16) |
+//!
+//! Sizes default to a few thousand triangles so a run takes seconds to minutes; the
+//! options of [`SceneOptions`] scale them.
+
+mod quadrant_sphere;
+
+use glam::DVec3;
+use mesh_core::generators::{
+    self, GeneratorError, PlacedSphere, place_random_spheres, spheres_mesh,
+};
+use mesh_core::{Label, LabeledMesh};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use crate::flows::{
+    CurlNoiseFlow, CurlNoiseParams, EnrightFlow, Flow, FlowError, Integrator, InterfaceSpeeds,
+    MeanCurvatureFlow, NormalFlow, NormalScheme, OneShot, RigidRotation, Schedule, TargetPositions,
+    cyclic_normal_flow,
+};
+
+pub use quadrant_sphere::{MAX_RESOLUTION as QUADRANT_MAX_RESOLUTION, quadrant_sphere};
+
+/// One entry of the scene table.
+#[derive(Clone, Copy, Debug)]
+pub struct SceneInfo {
+    /// Name on the command line.
+    pub name: &'static str,
+    /// One line for `surftrack scenes`.
+    pub summary: &'static str,
+    /// Default number of steps (0: a mesh for `generate` only, not a tracked scene).
+    pub steps: usize,
+    /// What `--count` and `--resolution` mean for it.
+    pub knobs: &'static str,
+}
+
+/// Every built-in scene, tracked ones first.
+pub const SCENES: &[SceneInfo] = &[
+    SceneInfo {
+        name: "double-bubble",
+        summary: "two spheres expand, merge into a double bubble, reverse, separate and vanish (2024 paper Fig. 18)",
+        steps: 60,
+        knobs: "--radius (0.3), --resolution = icosphere subdivisions (3)",
+    },
+    SceneInfo {
+        name: "spheres",
+        summary: "N random non-overlapping spheres expanding under naive normal flow: the robustness benchmark (2024 paper §9.6)",
+        steps: 40,
+        knobs: "--count/--spheres N (20), --resolution = icosphere subdivisions (2), --seed",
+    },
+    SceneInfo {
+        name: "zalesak",
+        summary: "Zalesak's notched sphere rotated once about an outside point (Los Topos §8.1)",
+        steps: 100,
+        knobs: "--resolution = grid cells across the sphere (32)",
+    },
+    SceneInfo {
+        name: "enright",
+        summary: "a sphere of 4 materials stretched by the Enright field and brought back at t = 3 (Los Topos Fig. 14)",
+        steps: 300,
+        knobs: "--resolution = segments per quarter great circle (12)",
+    },
+    SceneInfo {
+        name: "curl-noise",
+        summary: "4 spheres under alternating normal flow and seeded curl noise (Los Topos Fig. 15)",
+        steps: 200,
+        knobs: "--resolution = icosphere subdivisions (3), --seed",
+    },
+    SceneInfo {
+        name: "foam",
+        summary: "Voronoi cells in the unit cube under mean curvature flow (Los Topos Fig. 17)",
+        steps: 100,
+        knobs: "--count N cells (16), --seed",
+    },
+    SceneInfo {
+        name: "inversion",
+        summary: "a double bubble deformed by strong smooth noise into self-intersection, fixed in one step (2024 paper Fig. 15)",
+        steps: 1,
+        knobs: "--resolution = segments around the triple circle (32), --seed",
+    },
+    SceneInfo {
+        name: "copies",
+        summary: "k rotated copies of a mesh (--mesh FILE or the notched sphere) teleported onto each other, one step (2024 paper Fig. 16)",
+        steps: 1,
+        knobs: "--count k (4), --mesh FILE, --resolution (notched sphere cells, 16), --seed",
+    },
+    SceneInfo {
+        name: "cyclic",
+        summary: "two bubbles under cyclical normal flow a->b->c->a, curling around a still triple curve (Los Topos Fig. 16)",
+        steps: 100,
+        knobs: "--radius (1), --resolution = segments around the triple circle (32)",
+    },
+    SceneInfo {
+        name: "sphere",
+        summary: "(generate only) an icosphere, label 1 inside, 0 outside",
+        steps: 0,
+        knobs: "--resolution = subdivisions (4), --radius (1)",
+    },
+];
+
+/// The entry of a scene, if it exists.
+pub fn scene_info(name: &str) -> Option<&'static SceneInfo> {
+    SCENES.iter().find(|s| s.name == name)
+}
+
+/// Parameters shared by the scene builders; `None` means the scene's default.
+#[derive(Debug, Default, Clone)]
+pub struct SceneOptions {
+    /// Random seed.
+    pub seed: u64,
+    /// Spheres, foam cells or copies.
+    pub count: Option<usize>,
+    /// Resolution (meaning depends on the scene, see [`SceneInfo::knobs`]).
+    pub resolution: Option<u32>,
+    /// Radius.
+    pub radius: Option<f64>,
+    /// Input mesh for `copies`.
+    pub mesh: Option<LabeledMesh>,
+}
+
+/// Why a scene could not be built.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// No scene has this name.
+    #[error("unknown scene `{0}`; known scenes: {known}", known = SCENES.iter().map(|s| s.name).collect::<Vec<_>>().join(", "))]
+    Unknown(String),
+    /// The scene exists as a mesh but has no motion.
+    #[error("scene `{0}` is a mesh for `generate` only; tracked scenes: {known}", known = SCENES.iter().filter(|s| s.steps > 0).map(|s| s.name).collect::<Vec<_>>().join(", "))]
+    NotTracked(String),
+    /// The generator refused the parameters.
+    #[error(transparent)]
+    Generator(#[from] GeneratorError),
+    /// The flow refused its parameters.
+    #[error(transparent)]
+    Flow(#[from] FlowError),
+}
+
+/// A tracked scene: where it starts, how it moves, and for how long by default.
+pub struct Scene {
+    /// Scene name.
+    pub name: &'static str,
+    /// The initial mesh (valid, and intersection-free, so either backend can start).
+    pub mesh: LabeledMesh,
+    /// What proposes the vertex motion.
+    pub flow: Box<dyn Flow>,
+    /// Time step; a flow with a stability limit may be stepped more finely.
+    pub dt: f64,
+    /// Default number of steps.
+    pub steps: usize,
+    /// Spheres, cells or copies, for scenes with a count.
+    pub count: Option<usize>,
+}
+
+/// `n` spheres of subdivision `s` as one mesh (labels from the [`PlacedSphere`]s).
+fn sphere_set(spheres: &[PlacedSphere], subdivisions: u32) -> Result<LabeledMesh, SceneError> {
+    Ok(spheres_mesh(spheres, subdivisions)?)
+}
+
+/// Naive (area-weighted vertex normal) normal flow: every material but 0 grows at `speed`.
+fn expand(speed: f64) -> Result<NormalFlow, FlowError> {
+    NormalFlow::new(
+        InterfaceSpeeds::grow_into(Label::OUTSIDE, speed),
+        NormalScheme::VertexNormals,
+    )
+}
+
+/// Largest sphere radius of the `spheres` scene for `n` spheres in the unit cube: keeps
+/// the packing fraction near 5 % for any `n`, so placement never struggles and the
+/// spheres have room to grow into each other.
+fn spheres_radius(n: usize) -> f64 {
+    (0.3 * (n.max(1) as f64).powf(-1.0 / 3.0)).min(0.2)
+}
+
+/// Builds a tracked scene by name.
+pub fn build_tracked(name: &str, o: &SceneOptions) -> Result<Scene, SceneError> {
+    let info = scene_info(name).ok_or_else(|| SceneError::Unknown(name.to_string()))?;
+    if info.steps == 0 {
+        return Err(SceneError::NotTracked(name.to_string()));
+    }
+    let resolution = |default: u32| o.resolution.unwrap_or(default);
+    let label = Label::new;
+    let (mesh, flow, dt, count): (LabeledMesh, Box<dyn Flow>, f64, Option<usize>) = match name {
+        "double-bubble" => {
+            // Gap of half a radius; they touch at t = r/4 and have a wide shared wall by
+            // t = 0.6 r, when the flow reverses; at t = 2.6 r both have shrunk to nothing.
+            let r = o.radius.unwrap_or(0.3);
+            let spheres = [-1.0, 1.0].map(|side: f64| PlacedSphere {
+                centre: DVec3::new(side * 1.25 * r, 0.0, 0.0),
+                radius: r,
+                label: label(if side < 0.0 { 1 } else { 2 }),
+            });
+            let mesh = sphere_set(&spheres, resolution(3))?;
+            let flow = Schedule::new(
+                vec![
+                    (0.6 * r, Box::new(expand(1.0)?) as Box<dyn Flow>),
+                    (2.0 * r, Box::new(expand(-1.0)?)),
+                ],
+                false,
+            )?;
+            (mesh, Box::new(flow), 2.6 * r / 60.0, None)
+        }
+        "spheres" => {
+            // Speed and step: every vertex moves ~0.3 of the smallest spheres' edge per
+            // step, and over 40 steps the spheres grow by half their typical spacing.
+            let n = o.count.unwrap_or(20);
+            let r_max = spheres_radius(n);
+            let spheres =
+                place_random_spheres(n, DVec3::ZERO, DVec3::ONE, [0.5 * r_max, r_max], o.seed)?;
+            let mesh = sphere_set(&spheres, resolution(2))?;
+            let speed = 0.5 * (n.max(1) as f64).powf(-1.0 / 3.0);
+            (mesh, Box::new(expand(speed)?), 1.0 / 40.0, Some(n))
+        }
+        "zalesak" => {
+            let mesh = generators::zalesak(resolution(32) as usize)?;
+            let flow = RigidRotation::zalesak(DVec3::new(0.5, 0.5, 0.5), 1.0)?;
+            (mesh, Box::new(flow), 1.0 / 100.0, None)
+        }
+        "enright" => {
+            let mesh = quadrant_sphere(DVec3::splat(0.35), 0.15, resolution(12))?;
+            let flow = EnrightFlow::new(EnrightFlow::DEFAULT_PERIOD)?;
+            (
+                mesh,
+                Box::new(flow),
+                EnrightFlow::DEFAULT_PERIOD / 300.0,
+                None,
+            )
+        }
+        "curl-noise" => {
+            // Four spheres of radius 0.2 at the corners of a regular tetrahedron, 0.49
+            // apart; normal flow and curl noise take turns, one step each.
+            let corners = [
+                [1.0, 1.0, 1.0],
+                [1.0, -1.0, -1.0],
+                [-1.0, 1.0, -1.0],
+                [-1.0, -1.0, 1.0],
+            ];
+            let spheres: Vec<PlacedSphere> = corners
+                .iter()
+                .enumerate()
+                .map(|(i, c)| PlacedSphere {
+                    centre: DVec3::from_array(*c).normalize() * 0.3,
+                    radius: 0.2,
+                    label: label(i as u32 + 1),
+                })
+                .collect();
+            let mesh = sphere_set(&spheres, resolution(3))?;
+            let dt = 0.01;
+            let noise = CurlNoiseFlow::new(CurlNoiseParams {
+                seed: o.seed,
+                modes: 16,
+                length_scale: 0.5,
+                amplitude: 0.5,
+            })?;
+            let flow = Schedule::new(
+                vec![
+                    (dt, Box::new(expand(0.5)?) as Box<dyn Flow>),
+                    (dt, Box::new(noise)),
+                ],
+                true,
+            )?;
+            (mesh, Box::new(flow), dt, None)
+        }
+        "foam" => {
+            let n = o.count.unwrap_or(16);
+            let mesh = generators::voronoi_foam(n, o.seed, DVec3::ZERO, DVec3::ONE)?;
+            (mesh, Box::new(MeanCurvatureFlow::new(1.0)?), 1e-3, Some(n))
+        }
+        "inversion" => {
+            // Noise of rms amplitude half the radius at a wavelength of 0.8 radius, one
+            // forward Euler step of length 1: the bubble walls fold through each other.
+            let r = o.radius.unwrap_or(1.0);
+            let mesh = generators::double_bubble(r, resolution(32) as usize)?;
+            let noise = CurlNoiseFlow::new(CurlNoiseParams {
+                seed: o.seed,
+                modes: 32,
+                length_scale: 0.8 * r,
+                amplitude: 0.5 * r,
+            })?
+            .with_integrator(Integrator::ForwardEuler);
+            (
+                mesh,
+                Box::new(OneShot::new("inversion-noise", Box::new(noise))),
+                1.0,
+                None,
+            )
+        }
+        "copies" => {
+            // The copies start side by side along x, apart; the single step teleports them
+            // onto their rotated, overlapping positions.
+            let k = o.count.unwrap_or(4);
+            let base = match &o.mesh {
+                Some(mesh) => mesh.clone(),
+                None => generators::zalesak(resolution(16) as usize)?,
+            };
+            let target = generators::copies(&base, k, o.seed)?;
+            let per_copy = base.to_raw().0.len().max(1);
+            let (lo, hi) = target
+                .vertices()
+                .map(|v| target.position(v))
+                .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
+                    (lo.min(p), hi.max(p))
+                });
+            let spacing = 1.5 * (hi - lo).max_element().max(f64::MIN_POSITIVE);
+            let mut mesh = target.clone();
+            for v in target.vertices() {
+                let copy = (v.idx() / per_copy) as f64;
+                mesh.set_position(v, target.position(v) + DVec3::X * spacing * copy);
+            }
+            let flow = TargetPositions::new(target.positions().to_vec());
+            (mesh, Box::new(flow), 1.0, Some(k))
+        }
+        "cyclic" => {
+            let r = o.radius.unwrap_or(1.0);
+            let mesh = generators::double_bubble(r, resolution(32) as usize)?;
+            let flow = cyclic_normal_flow(label(1), label(2), Label::OUTSIDE, 1.0)?;
+            (mesh, Box::new(flow), 0.01 * r, None)
+        }
+        other => return Err(SceneError::Unknown(other.to_string())),
+    };
+    Ok(Scene {
+        name: info.name,
+        mesh,
+        flow,
+        dt,
+        steps: info.steps,
+        count,
+    })
+}
+
+/// Builds the mesh `surftrack generate` writes for a scene: the tracked scene's initial
+/// mesh, except for `double-bubble`, which writes the merged double bubble (two bubbles,
+/// a shared wall and a triple curve: the scene's middle), `copies`, which writes the
+/// overlapping union (what the tracker is asked to repair), and `sphere`, one icosphere.
+pub fn build_scene(name: &str, o: &SceneOptions) -> Result<LabeledMesh, SceneError> {
+    match name {
+        "double-bubble" => Ok(generators::double_bubble(
+            o.radius.unwrap_or(1.0),
+            o.resolution.unwrap_or(48) as usize,
+        )?),
+        "sphere" => Ok(generators::icosphere(
+            o.resolution.unwrap_or(4),
+            DVec3::ZERO,
+            o.radius.unwrap_or(1.0),
+            [Label::OUTSIDE, Label::new(1)],
+        )?),
+        "copies" => {
+            let base = match &o.mesh {
+                Some(mesh) => mesh.clone(),
+                None => generators::zalesak(o.resolution.unwrap_or(16) as usize)?,
+            };
+            Ok(generators::copies(&base, o.count.unwrap_or(4), o.seed)?)
+        }
+        _ => Ok(build_tracked(name, o)?.mesh),
+    }
+}
+
+/// The remeshing benchmark's scene (`benches/remesh.rs`, `examples/remesh.rs`):
+/// 40 spheres of 5120 triangles each (~205k triangles) with radii varying threefold, so one
+/// target edge length makes the small ones collapse and the large ones split; every vertex
+/// is pushed radially from its sphere's centre by up to ±20 % of that sphere's edge length,
+/// so flips and smoothing have work too. Still intersection-free: each sphere stays
+/// star-shaped about its centre, and the jitter stays below half the smallest gap.
+pub fn noisy_spheres() -> Result<LabeledMesh, GeneratorError> {
+    let spheres = place_random_spheres(40, DVec3::ZERO, DVec3::ONE, [0.03, 0.09], 7)?;
+    let mut mesh = spheres_mesh(&spheres, 4)?;
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let vertices: Vec<_> = mesh.vertices().collect();
+    for v in vertices {
+        let p = mesh.position(v);
+        let Some(sphere) = spheres.iter().min_by(|a, b| {
+            (a.centre.distance(p) - a.radius)
+                .abs()
+                .total_cmp(&(b.centre.distance(p) - b.radius).abs())
+        }) else {
+            continue;
+        };
+        // An icosphere of 4 subdivisions has edges of about 0.066 radius.
+        let jitter = rng.random_range(-1.0..1.0) * 0.2 * 0.066 * sphere.radius;
+        mesh.set_position(v, p + (p - sphere.centre).normalize_or_zero() * jitter);
+    }
+    Ok(mesh)
+}
+
+/// The smallest sensible size of each scene (a few hundred to a few thousand
+/// triangles): for smoke tests and CI, where every scene must run through every backend
+/// in seconds. Unknown names get the defaults.
+pub fn smoke_options(name: &str) -> SceneOptions {
+    let (count, resolution) = match name {
+        "double-bubble" | "curl-noise" => (None, Some(2)),
+        "spheres" => (Some(4), Some(2)),
+        "zalesak" => (None, Some(10)),
+        "enright" => (None, Some(4)),
+        "foam" => (Some(4), None),
+        "inversion" | "cyclic" => (None, Some(8)),
+        "copies" => (Some(2), Some(8)),
+        _ => (None, None),
+    };
+    SceneOptions {
+        seed: 3,
+        count,
+        resolution,
+        ..SceneOptions::default()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mesh_core::validate::{ValidateOptions, validate};
+
+    #[test]
+    fn every_tracked_scene_starts_valid_and_intersection_free_with_a_full_proposal() {
+        for info in SCENES.iter().filter(|s| s.steps > 0) {
+            let scene = build_tracked(info.name, &smoke_options(info.name))
+                .unwrap_or_else(|e| panic!("{}: {e}", info.name));
+            let report = validate(&scene.mesh, &ValidateOptions::with_intersections());
+            assert!(report.is_valid(), "{}: {report}", info.name);
+            assert!(scene.mesh.num_triangles() > 0 && scene.dt > 0.0 && scene.steps > 0);
+            let proposed = scene.flow.propose(&scene.mesh, 0.0, scene.dt);
+            assert_eq!(
+                proposed.len(),
+                scene.mesh.vertex_capacity(),
+                "{}",
+                info.name
+            );
+            assert!(proposed.iter().all(|p| p.is_finite()), "{}", info.name);
+            // Every scene moves something in its first step.
+            let moved = scene
+                .mesh
+                .vertices()
+                .any(|v| proposed[v.idx()] != scene.mesh.position(v));
+            assert!(moved, "{} proposes no motion", info.name);
+        }
+    }
+
+    #[test]
+    fn copies_start_apart_and_are_sent_onto_the_overlapping_union() {
+        let o = smoke_options("copies");
+        let scene = build_tracked("copies", &o).unwrap();
+        let union = build_scene("copies", &o).unwrap();
+        let proposed = scene.flow.propose(&scene.mesh, 0.0, scene.dt);
+        assert_eq!(proposed, union.positions());
+        // The first copy does not move; the second is shifted along x only.
+        let half = scene.mesh.vertex_capacity() / 2;
+        let first = mesh_core::VertexId::new(0);
+        let second = mesh_core::VertexId::new(half as u32);
+        assert_eq!(scene.mesh.position(first), union.position(first));
+        let shift = scene.mesh.position(second) - union.position(second);
+        assert!(shift.x > 0.0 && shift.y == 0.0 && shift.z == 0.0);
+    }
+
+    #[test]
+    fn unknown_and_untracked_scenes_are_errors() {
+        let o = SceneOptions::default();
+        assert!(matches!(
+            build_tracked("nope", &o),
+            Err(SceneError::Unknown(_))
+        ));
+        assert!(matches!(
+            build_tracked("sphere", &o),
+            Err(SceneError::NotTracked(_))
+        ));
+        assert!(build_scene("sphere", &o).is_ok());
+        let bad = SceneOptions {
+            count: Some(0),
+            ..SceneOptions::default()
+        };
+        assert!(matches!(
+            build_tracked("spheres", &bad),
+            Err(SceneError::Generator(_))
+        ));
+    }
+
+    #[test]
+    fn spheres_are_seeded() {
+        let o = |seed| SceneOptions {
+            seed,
+            ..smoke_options("spheres")
+        };
+        let a = build_tracked("spheres", &o(1)).unwrap().mesh;
+        let b = build_tracked("spheres", &o(1)).unwrap().mesh;
+        let c = build_tracked("spheres", &o(2)).unwrap().mesh;
+        assert_eq!(a.positions(), b.positions());
+        assert_ne!(a.positions(), c.positions());
+    }
+}
