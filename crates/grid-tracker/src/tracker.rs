@@ -14,14 +14,13 @@
 //! as they were. Proposals may be arbitrarily large (teleporting shapes into each other
 //! is a boolean union): nothing in the step assumes small motion.
 
-use std::collections::BTreeMap;
 use std::time::Instant;
 
 use glam::DVec3;
 use mesh_core::remesh::{VertexAttributes, improve::mean_edge_length};
 use mesh_core::validate::{ValidateOptions, validate};
 use mesh_core::{
-    Label, LabeledMesh, StepReport, SurfaceTracker, TopologyEvents, TrackError, TriId,
+    LabeledMesh, RegionCensus, StepReport, SurfaceTracker, TopologyEvents, TrackError, TriId,
     check_proposal,
 };
 
@@ -34,10 +33,9 @@ use crate::pipeline::{PassStats, Timings, improve_mesh, run_pass};
 ///
 /// The mesh is compacted after every step that removed anything, so vertex ids change
 /// with topology: propose positions for [`SurfaceTracker::mesh`] as it is after the last
-/// step. [`StepReport::events`] counts merges and splits per label from the number of
-/// bounded region shells before and after the step (fewer: merged, more: split; a label
-/// whose regions all vanished counts as neither); two materials forming an interface is
-/// not a merge.
+/// step. [`StepReport::events`] counts merges and splits with
+/// [`RegionCensus::events_since`], as the collision backend does: regions of one label
+/// joining, or separate surface components coming into contact, are merges.
 #[derive(Clone, Debug)]
 pub struct GridTracker {
     mesh: LabeledMesh,
@@ -45,18 +43,9 @@ pub struct GridTracker {
     params: GridParams,
     cell_size: f64,
     step: u64,
-    /// Bounded region shells per label of the current mesh, to count merges and splits.
-    shells: BTreeMap<Label, usize>,
+    /// Regions of the current mesh, to count merges and splits.
+    census: RegionCensus,
     last: Option<PassStats>,
-}
-
-/// Bounded region shells per label.
-fn shell_counts(mesh: &LabeledMesh) -> BTreeMap<Label, usize> {
-    let mut counts = BTreeMap::new();
-    for s in mesh.regions().bounded() {
-        *counts.entry(s.label).or_insert(0) += 1;
-    }
-    counts
 }
 
 /// Checks the preconditions of a tracker's or `fix`'s input: layers 1–3 of validation.
@@ -108,14 +97,14 @@ impl GridTracker {
                 "cell size ℓ = {cell_size} (mean edge length) must be finite and > 0"
             )));
         }
-        let shells = shell_counts(&mesh);
+        let census = RegionCensus::of(&mesh);
         Ok(Self {
             mesh,
             attrs: VertexAttributes::none(),
             params,
             cell_size,
             step: 0,
-            shells,
+            census,
             last: None,
         })
     }
@@ -250,27 +239,18 @@ impl SurfaceTracker for GridTracker {
         let (mut mesh, mut attrs, stats, edits) = self.step_on_copy(proposed, &mut timings)?;
         let start = Instant::now();
         compact(&mut mesh, &mut attrs);
-        let shells = shell_counts(&mesh);
+        let census = RegionCensus::of(&mesh);
         timings.add("commit", start.elapsed());
-        let mut events = TopologyEvents {
+        let (merges, splits) = census.events_since(&self.census);
+        let events = TopologyEvents {
+            merges,
+            splits,
             remeshing_edits: edits,
             ..TopologyEvents::default()
         };
-        let labels: std::collections::BTreeSet<Label> =
-            self.shells.keys().chain(shells.keys()).copied().collect();
-        for l in labels {
-            let before = self.shells.get(&l).copied().unwrap_or(0) as i64;
-            let after = shells.get(&l).copied().unwrap_or(0) as i64;
-            // A label whose regions all vanished (shrunk away) did not merge.
-            if after < before && after > 0 {
-                events.merges += (before - after) as u64;
-            } else if after > before {
-                events.splits += (after - before) as u64;
-            }
-        }
         self.mesh = mesh;
         self.attrs = attrs;
-        self.shells = shells;
+        self.census = census;
         self.step += 1;
         self.last = Some(stats);
         Ok(StepReport {

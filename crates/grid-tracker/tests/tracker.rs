@@ -70,9 +70,11 @@ fn normal_flow_merges_then_reversed_flow_separates_and_vanishes() {
     let ell = tracker.cell_size();
     let speed = 0.6 * ell;
     let mut merged_at = None;
+    let (mut merges, mut splits) = (0, 0);
     for frame in 0..6 {
         let proposal = normal_flow(tracker.mesh(), speed);
         let report = tracker.advance(&proposal).expect("outward step");
+        merges += report.events.merges;
         assert_eq!(report.substeps, 1);
         assert_clean(tracker.mesh(), frame);
         if merged_at.is_none() && interface_triangles(tracker.mesh()) > 0 {
@@ -82,12 +84,14 @@ fn normal_flow_merges_then_reversed_flow_separates_and_vanishes() {
     let merged_at = merged_at.expect("the bubbles never formed a shared wall");
     assert!(interface_triangles(tracker.mesh()) > 5);
     assert!(merged_at <= 3, "merged late, at frame {merged_at}");
+    assert_eq!(merges, 1, "contact of the two bubbles is one merge event");
 
     let mut separated = false;
     let mut vanished = None;
     for frame in 6..60 {
         let proposal = normal_flow(tracker.mesh(), -speed);
-        tracker.advance(&proposal).expect("inward step");
+        let report = tracker.advance(&proposal).expect("inward step");
+        splits += report.events.splits;
         assert_clean(tracker.mesh(), frame);
         let m = tracker.mesh();
         if interface_triangles(m) == 0 && m.num_triangles() > 0 {
@@ -99,6 +103,7 @@ fn normal_flow_merges_then_reversed_flow_separates_and_vanishes() {
         }
     }
     assert!(separated, "the bubbles never separated");
+    assert!(splits >= 1, "the separation was not counted as a split");
     assert!(vanished.is_some(), "the bubbles never vanished");
     // An empty mesh stays a valid state to step from.
     tracker.advance(&[]).expect("empty step");

@@ -35,7 +35,7 @@ pub use error::MeshError;
 pub use glam::DVec3;
 pub use ids::{CornerId, Id, IdVec, Label, TriId, VertexId};
 pub use mesh::{Compaction, LabeledMesh};
-pub use regions::{RegionShell, Regions};
+pub use regions::{RegionCensus, RegionShell, Regions};
 pub use tracker::{
     StageTiming, StepReport, SurfaceTracker, TopologyEvents, TrackError, check_proposal,
 };

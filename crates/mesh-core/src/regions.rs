@@ -102,3 +102,144 @@ impl LabeledMesh {
         Regions { shells, side_shell }
     }
 }
+
+/// A summary of the mesh's regions that the trackers compare before and after a step to
+/// count topology changes ([`RegionCensus::events_since`]), so that both backends count
+/// merges and splits the same way.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct RegionCensus {
+    /// Connected components of the surface (triangles joined across edges): two bubbles
+    /// that touch form one cluster, whatever their labels.
+    pub components: usize,
+    /// Bounded region shells per label.
+    pub shells: std::collections::BTreeMap<Label, usize>,
+}
+
+impl RegionCensus {
+    /// The census of `mesh` (one flood fill, linear time).
+    pub fn of(mesh: &LabeledMesh) -> Self {
+        let regions = mesh.regions();
+        let mut shells = std::collections::BTreeMap::new();
+        for s in regions.bounded() {
+            *shells.entry(s.label).or_insert(0) += 1;
+        }
+        // Both sides of a triangle lie on one surface component: union their shells.
+        let mut parent: Vec<u32> = (0..regions.shells.len() as u32).collect();
+        fn find(parent: &mut [u32], mut i: u32) -> u32 {
+            while parent[i as usize] != i {
+                let up = parent[parent[i as usize] as usize];
+                parent[i as usize] = up;
+                i = up;
+            }
+            i
+        }
+        for t in mesh.triangles() {
+            if let (Some(a), Some(b)) = (
+                regions.shell_of(t, Side::Front),
+                regions.shell_of(t, Side::Back),
+            ) {
+                let (ra, rb) = (find(&mut parent, a as u32), find(&mut parent, b as u32));
+                if ra != rb {
+                    parent[ra.max(rb) as usize] = ra.min(rb);
+                }
+            }
+        }
+        let components = (0..parent.len() as u32)
+            .filter(|&i| find(&mut parent, i) == i)
+            .count();
+        Self { components, shells }
+    }
+
+    /// `(merges, splits)` from `before` to `self`.
+    ///
+    /// A merge is two regions of one label becoming one, or two surface components
+    /// coming into contact (two bubbles of different labels forming a shared interface);
+    /// a split is the reverse. A label whose regions all vanished (shrunk away) is
+    /// neither, so its shells are discounted from the component count. When both signals
+    /// see the same event (two same-label spheres merging also join two components),
+    /// it counts once: the larger of the two counts is taken.
+    pub fn events_since(&self, before: &RegionCensus) -> (u64, u64) {
+        let (mut label_merges, mut label_splits, mut vanished) = (0usize, 0usize, 0usize);
+        let labels: std::collections::BTreeSet<Label> = before
+            .shells
+            .keys()
+            .chain(self.shells.keys())
+            .copied()
+            .collect();
+        for l in labels {
+            let b = before.shells.get(&l).copied().unwrap_or(0);
+            let a = self.shells.get(&l).copied().unwrap_or(0);
+            if a == 0 {
+                vanished += b;
+            } else if a < b {
+                label_merges += b - a;
+            } else {
+                label_splits += a - b;
+            }
+        }
+        let surviving = before.components.saturating_sub(vanished);
+        let component_merges = surviving.saturating_sub(self.components);
+        let component_splits = self.components.saturating_sub(before.components);
+        (
+            label_merges.max(component_merges) as u64,
+            label_splits.max(component_splits) as u64,
+        )
+    }
+}
+
+#[cfg(test)]
+mod census_tests {
+    use glam::DVec3;
+
+    use super::RegionCensus;
+    use crate::generators::{double_bubble, icosphere};
+    use crate::ids::Label;
+    use crate::mesh::LabeledMesh;
+
+    fn spheres(labels: [u32; 2], gap: bool) -> LabeledMesh {
+        let a = icosphere(1, DVec3::ZERO, 1.0, [Label::new(0), Label::new(labels[0])]).unwrap();
+        let x = if gap { 3.0 } else { 0.0 };
+        let b = icosphere(
+            1,
+            DVec3::new(x, 0.0, 0.0),
+            0.5,
+            [Label::new(0), Label::new(labels[1])],
+        )
+        .unwrap();
+        let (mut positions, mut triangles, mut labels) = a.to_raw();
+        let (p, t, l) = b.to_raw();
+        let offset = positions.len() as u32;
+        positions.extend(p);
+        triangles.extend(t.iter().map(|t| t.map(|v| v + offset)));
+        labels.extend(l);
+        LabeledMesh::from_raw(positions, &triangles, &labels).unwrap()
+    }
+
+    #[test]
+    fn contact_of_two_bubbles_is_one_merge_and_separation_one_split() {
+        let apart = RegionCensus::of(&spheres([1, 2], true));
+        let joined = RegionCensus::of(&double_bubble(0.5, 12).unwrap());
+        assert_eq!(apart.components, 2);
+        assert_eq!(joined.components, 1);
+        assert_eq!(joined.events_since(&apart), (1, 0));
+        assert_eq!(apart.events_since(&joined), (0, 1));
+    }
+
+    #[test]
+    fn same_label_merge_counts_once_and_vanishing_counts_nothing() {
+        let two = RegionCensus::of(&spheres([1, 1], true));
+        let one = RegionCensus::of(
+            &icosphere(1, DVec3::ZERO, 1.0, [Label::new(0), Label::new(1)]).unwrap(),
+        );
+        assert_eq!(two.shells.get(&Label::new(1)), Some(&2));
+        assert_eq!(one.events_since(&two), (1, 0));
+        assert_eq!(two.events_since(&one), (0, 1));
+        // Label 2 shrinks away: neither a merge nor a split.
+        let mixed = RegionCensus::of(&spheres([1, 2], true));
+        assert_eq!(one.events_since(&mixed), (0, 0));
+        assert_eq!(
+            RegionCensus::of(&LabeledMesh::new()).events_since(&one),
+            (0, 0)
+        );
+    }
+}
