@@ -105,7 +105,8 @@ pub struct TrackerOptions {
     /// Seed of any randomness in the backend (the grid backend's per-step grid shifts).
     pub seed: u64,
     /// Run `validate()` after every step (the step fails rather than return an invalid
-    /// mesh). Default `None`: the backend's default (on in debug builds).
+    /// mesh). Default `None`: the backend's default (grid: on in debug builds;
+    /// collision: structural checks always).
     pub validate_each_step: Option<bool>,
 }
 
@@ -144,10 +145,22 @@ pub fn make_tracker_with(
             let tracker = grid_tracker::GridTracker::new(mesh, params).map_err(invalid)?;
             Ok(Box::new(tracker))
         }
-        Backend::Collision => Err(BackendError::Unavailable {
-            backend,
-            reason: "not wired",
-        }),
+        Backend::Collision => {
+            let mut params = collision_tracker::CollisionParams {
+                target_edge_length: options.length_scale,
+                ..Default::default()
+            };
+            if let Some(v) = options.validate_each_step {
+                params.validation = if v {
+                    collision_tracker::StepValidation::Structure
+                } else {
+                    collision_tracker::StepValidation::Off
+                };
+            }
+            let tracker =
+                collision_tracker::CollisionTracker::new(mesh, params).map_err(invalid)?;
+            Ok(Box::new(tracker))
+        }
     }
 }
 

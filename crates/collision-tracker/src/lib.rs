@@ -10,8 +10,12 @@
 //! - [`proximity`]: static closest points — [`proximity::proximity_vertex_triangle`],
 //!   [`proximity::proximity_edge_edge`] returning a [`proximity::Proximity`].
 //!
-//! The tracker itself is not implemented yet: the crate is wired into the workspace and the
-//! facade so that the harness reports it as unavailable instead of failing to build.
+//! The tracker, [`CollisionTracker`] (a [`mesh_core::SurfaceTracker`], parameters in
+//! [`CollisionParams`]), runs Los Topos Algorithm 1 — resolve, merge, improve, t1t2,
+//! validate — on a clone of its mesh and swaps it in only when the whole step succeeded.
+//!
+//! The backend is available ([`UNAVAILABLE`] is `None`): the merge, foam and rotation
+//! scenes of issue 5 pass through the trait (`tests/tracker.rs`).
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
@@ -19,9 +23,20 @@ pub mod broadphase;
 pub mod ccd;
 pub mod guard;
 pub mod merge;
+pub mod params;
 pub mod proximity;
 pub mod resolve;
+mod step;
+mod t1t2;
+pub mod tracker;
 
-/// Why this backend cannot be constructed yet; the facade reports it to the user.
-pub const UNAVAILABLE: Option<&str> =
-    Some("the collision backend is not implemented yet (issue 5)");
+pub use broadphase::{Broadphase, Candidates, Elements};
+pub use guard::{CollisionGuard, CollisionGuardOptions, GuardStats};
+pub use merge::{MergeError, MergeOptions, MergeReport, snap_merge, snap_merge_with};
+pub use params::{AmbientFlow, CollisionParams, ParamsError, StepValidation, VelocityGradientFn};
+pub use resolve::{ResolveError, ResolveOptions, ResolveReport, Resolved, resolve_step};
+pub use tracker::CollisionTracker;
+
+/// Why this backend cannot be constructed, if it cannot; the facade reports it to the
+/// user. `None`: the backend is available.
+pub const UNAVAILABLE: Option<&str> = None;

@@ -1,1 +1,462 @@
-//! Snap merging (Los Topos §7.1). Work in progress (issue 5).
+//! Snap merging (Los Topos §7.1, "generalized snapping"): surfaces that come within the
+//! merge distance of each other are joined by snapping vertex pairs together.
+//!
+//! ```text
+//! for round in 0..max_rounds:
+//!     proximate_pairs     vertex–triangle and edge–edge pairs closer than merge_distance,
+//!                         non-adjacent, nearest first
+//!     for each pair:      re-check it against the current mesh (still proximate,
+//!                         brought together by the flow if a displacement is given, and
+//!                         not joined to its partner by a short path of edges), then
+//!         counterparts    give each side a vertex: an existing vertex if the closest
+//!                         point is within merge_distance of one, else split the edge at
+//!                         the closest point (also when a triangle's closest point lies
+//!                         that close to one of its edges), else trisect the triangle there
+//!         snap            coalesce the two vertices at their average (refused when they
+//!                         share an edge, or would fold triangles meeting at ≥ 90°)
+//!     remove_degenerate   coincident triangle pairs: equal outer labels → both deleted
+//!                         (the regions merge), different → one kept with the two outer
+//!                         labels (a new interface)
+//!     pinch (optional)    duplicate singular vertices
+//!     stop when a round snaps nothing
+//! ```
+//!
+//! Every split, snap and removal is one atomic edit through the caller's guard (pass a
+//! [`crate::CollisionGuard`] to keep the mesh intersection-free), so a refused or vetoed
+//! step leaves the mesh as it was and the merge simply goes on with the next pair. The
+//! mesh stays valid throughout: splits and snaps preserve every invariant except that
+//! snaps may leave coincident triangle pairs, which the degenerate removal of the same
+//! round resolves.
+
+mod pairs;
+#[cfg(test)]
+mod tests;
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use glam::DVec3;
+use mesh_core::remesh::{
+    DegenerateReport, EditError, EditGuard, SnapError, SnapParams, VertexAttributes,
+    pinch_singular_vertices, remove_degenerate, snap_vertices, split_edge_at, split_triangle_at,
+};
+use mesh_core::{Label, LabeledMesh, MeshError, TriId, VertexId};
+
+use crate::proximity::{Proximity, proximity_edge_edge, proximity_vertex_triangle};
+use pairs::{Candidate, Pair, SurfaceReach, proximate_pairs};
+
+/// Options of [`snap_merge`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MergeOptions {
+    /// Elements closer than this are merged. Use [`MergeOptions::for_length`] for the
+    /// default, 0.02 × the mean edge length (the 2024 paper's comparison setting).
+    pub merge_distance: f64,
+    /// Bound on the find–split–snap–clean rounds. Default 4: a round snaps every pair that
+    /// is still proximate; later rounds catch the pairs the first round's splits created.
+    pub max_rounds: usize,
+    /// The snap's fold rule. Default [`SnapParams::default`] (90°).
+    pub snap: SnapParams,
+    /// Pinch singular vertices after each round. Default false: a vertex where two
+    /// surfaces touch after a partial merge is valid, and the next merge steps usually
+    /// complete it; pinching would pull it apart again.
+    pub pinch: bool,
+    /// A pair whose elements are joined by a path of mesh edges shorter than
+    /// `surface_reach_factor × merge_distance` is not merged: its elements are neighbours
+    /// on one sheet that only look proximate because the edges between them are tiny
+    /// (slivers, marching-cubes output), not two surfaces that came together. Default 2
+    /// (every pair is closer than the merge distance, and a path along a sheet between
+    /// two points is rarely longer than twice their distance).
+    pub surface_reach_factor: f64,
+    /// When `Some(a)`: the vertex attributes passed to [`snap_merge_with`] hold each
+    /// vertex's displacement over the step (the flow's proposal) in their first three
+    /// values, and only pairs that the displacement brings together faster than `a` along
+    /// their normal are merged. Los Topos merges surfaces *as they come within* the merge
+    /// distance; surfaces that are merely close — neighbours across a sliver, a notch
+    /// moving rigidly — are left alone. Default `None`: every proximate pair merges.
+    pub min_approach: Option<f64>,
+}
+
+impl MergeOptions {
+    /// The defaults for a mesh of mean edge length `l`: merge distance `0.02 · l`.
+    pub fn for_length(l: f64) -> Self {
+        Self {
+            merge_distance: 0.02 * l,
+            max_rounds: 4,
+            snap: SnapParams::default(),
+            pinch: false,
+            surface_reach_factor: 2.0,
+            min_approach: None,
+        }
+    }
+
+    /// The defaults for `mesh`, from its mean edge length.
+    pub fn for_mesh(mesh: &LabeledMesh) -> Self {
+        Self::for_length(mean_edge_length(mesh))
+    }
+}
+
+/// What [`snap_merge`] did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct MergeReport {
+    /// Vertex pairs snapped together.
+    pub snaps: usize,
+    /// Edges split at a closest point.
+    pub edge_splits: usize,
+    /// Triangles trisected at a closest point.
+    pub face_splits: usize,
+    /// Regions joined: over all labels, the decrease of the number of bounded region
+    /// shells of that label (a label whose count grows — e.g. a sliver of the outside
+    /// trapped between two merged sheets — adds nothing).
+    pub merges: usize,
+    /// Pairs of labels that share an interface after the merge and did not before.
+    pub new_interfaces: usize,
+    /// Proximate pairs found (over all rounds).
+    pub pairs: usize,
+    /// Splits and snaps the operations refused (adjacent vertices, fold angle, stale pair).
+    pub refused: usize,
+    /// Splits and snaps the guard vetoed.
+    pub vetoed: usize,
+    /// Pairs skipped as neighbours along the surface (see
+    /// [`MergeOptions::surface_reach_factor`]).
+    pub same_sheet: usize,
+    /// Pairs skipped because the flow does not bring them together (see
+    /// [`MergeOptions::min_approach`]).
+    pub not_approaching: usize,
+    /// Rounds run.
+    pub rounds: usize,
+    /// Degenerate removal, summed over rounds.
+    pub degenerate: DegenerateReport,
+    /// Singular vertices pinched.
+    pub pinched: usize,
+}
+
+impl MergeReport {
+    /// True when the merge changed the mesh (a split, snap, or degenerate removal), so
+    /// callers know whether indices and region counts must be refreshed.
+    pub fn changed(&self) -> bool {
+        self.snaps + self.edge_splits + self.face_splits > 0
+            || self.degenerate.collapsed_removed
+                + self.degenerate.pairs_relabelled
+                + self.degenerate.pairs_removed
+                > 0
+            || self.pinched > 0
+    }
+}
+
+/// Why [`snap_merge`] stopped. Edits already committed stay (each was atomic and the mesh
+/// is valid between them).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum MergeError {
+    /// An option is out of range.
+    #[error("merge option {what} = {value} is invalid: expected {expected}")]
+    InvalidOption {
+        /// Which option.
+        what: &'static str,
+        /// Its value.
+        value: f64,
+        /// What it should be.
+        expected: &'static str,
+    },
+    /// The mesh ran out of ids while splitting.
+    #[error("mesh capacity exceeded during snap merging: {0}")]
+    Mesh(#[from] MeshError),
+}
+
+/// Snap merging (see the [module doc](self)) without vertex attributes.
+pub fn snap_merge(
+    mesh: &mut LabeledMesh,
+    options: &MergeOptions,
+    guard: &mut impl EditGuard,
+) -> Result<MergeReport, MergeError> {
+    snap_merge_with(mesh, &mut VertexAttributes::none(), options, guard)
+}
+
+/// Snap merging carrying per-vertex attributes through every split and snap.
+pub fn snap_merge_with(
+    mesh: &mut LabeledMesh,
+    attrs: &mut VertexAttributes,
+    options: &MergeOptions,
+    guard: &mut dyn EditGuard,
+) -> Result<MergeReport, MergeError> {
+    let d = options.merge_distance;
+    if !(d.is_finite() && d >= 0.0) {
+        return Err(MergeError::InvalidOption {
+            what: "merge_distance",
+            value: d,
+            expected: "a finite, non-negative distance",
+        });
+    }
+    let f = options.surface_reach_factor;
+    if !(f.is_finite() && f >= 0.0) {
+        return Err(MergeError::InvalidOption {
+            what: "surface_reach_factor",
+            value: f,
+            expected: "a finite, non-negative factor",
+        });
+    }
+    if let Some(a) = options.min_approach
+        && !(a.is_finite() && a >= 0.0)
+    {
+        return Err(MergeError::InvalidOption {
+            what: "min_approach",
+            value: a,
+            expected: "a finite, non-negative speed",
+        });
+    }
+    let mut report = MergeReport::default();
+    if d == 0.0 || mesh.num_triangles() == 0 {
+        return Ok(report);
+    }
+    let shells_before = bounded_shells(mesh);
+    let interfaces_before = interfaces(mesh);
+    let mut reach = SurfaceReach::default();
+    for _ in 0..options.max_rounds {
+        report.rounds += 1;
+        let candidates = proximate_pairs(mesh, d);
+        if candidates.is_empty() {
+            break;
+        }
+        report.pairs += candidates.len();
+        let snaps_before = report.snaps;
+        for c in &candidates {
+            merge_pair(mesh, attrs, guard, c, options, &mut reach, &mut report)?;
+        }
+        let r = remove_degenerate(mesh, attrs, guard);
+        add_degenerate(&mut report.degenerate, &r);
+        if options.pinch {
+            report.pinched += pinch_singular_vertices(mesh, attrs, guard);
+        }
+        if report.snaps == snaps_before {
+            break;
+        }
+    }
+    let shells_after = bounded_shells(mesh);
+    report.merges = shells_before
+        .iter()
+        .map(|(l, &n)| n.saturating_sub(shells_after.get(l).copied().unwrap_or(0)))
+        .sum();
+    report.new_interfaces = interfaces(mesh).difference(&interfaces_before).count();
+    Ok(report)
+}
+
+/// Splits and snaps one proximate pair, if it is still proximate in the current mesh.
+fn merge_pair(
+    mesh: &mut LabeledMesh,
+    attrs: &mut VertexAttributes,
+    guard: &mut dyn EditGuard,
+    c: &Candidate,
+    options: &MergeOptions,
+    reach: &mut SurfaceReach,
+    report: &mut MergeReport,
+) -> Result<(), MergeError> {
+    let d = options.merge_distance;
+    // Whether the pair is one to leave alone: not brought together by the flow, or
+    // neighbours along one sheet.
+    let mut skip = |mesh: &LabeledMesh,
+                    attrs: &VertexAttributes,
+                    prox: &Proximity,
+                    quad: [VertexId; 4],
+                    report: &mut MergeReport| {
+        if let Some(a) = options.min_approach {
+            if attrs.dim() < 3 {
+                return false;
+            }
+            let relative: DVec3 = (0..4)
+                .map(|i| DVec3::from_slice(attrs.get(quad[i])) * prox.weights[i])
+                .sum();
+            // Negative: approaching. NaN is not approaching.
+            let rate = prox.normal.dot(relative);
+            if rate.is_nan() || rate >= -a {
+                report.not_approaching += 1;
+                return true;
+            }
+        }
+        let near = reach.near_along_surface(mesh, &c.pair, options.surface_reach_factor * d);
+        report.same_sheet += usize::from(near);
+        near
+    };
+    let sides = match c.pair {
+        Pair::VertexTriangle(v, t) => {
+            if !mesh.is_vertex_alive(v) || !mesh.is_triangle_alive(t) || mesh.tri(t).contains(&v) {
+                report.refused += 1;
+                return Ok(());
+            }
+            let prox = proximity_vertex_triangle(mesh.position(v), mesh.tri_positions(t));
+            let [a, b, e] = mesh.tri(t);
+            if prox.distance >= d || skip(mesh, attrs, &prox, [v, a, b, e], report) {
+                return Ok(());
+            }
+            let bary = [-prox.weights[1], -prox.weights[2], -prox.weights[3]];
+            counterpart_on_triangle(mesh, attrs, guard, t, bary, d, report)?.map(|w| (v, w))
+        }
+        Pair::EdgeEdge([a, b], [p, q]) => {
+            let live = [a, b, p, q].iter().all(|&v| mesh.is_vertex_alive(v))
+                && mesh.edge_triangles(a, b).next().is_some()
+                && mesh.edge_triangles(p, q).next().is_some();
+            if !live {
+                report.refused += 1;
+                return Ok(());
+            }
+            let x = [a, b, p, q].map(|v| mesh.position(v));
+            let prox = proximity_edge_edge(x[0], x[1], x[2], x[3]);
+            if prox.distance >= d || skip(mesh, attrs, &prox, [a, b, p, q], report) {
+                return Ok(());
+            }
+            let (s, u) = (prox.weights[1], -prox.weights[3]);
+            let first = counterpart_on_edge(mesh, attrs, guard, a, b, s, d, report)?;
+            let second = match first {
+                Some(_) => counterpart_on_edge(mesh, attrs, guard, p, q, u, d, report)?,
+                None => None,
+            };
+            first.zip(second)
+        }
+    };
+    let Some((keep, other)) = sides else {
+        return Ok(());
+    };
+    match snap_vertices(mesh, attrs, guard, keep, other, &options.snap) {
+        Ok(_) => report.snaps += 1,
+        Err(e) => count_failure(e, report)?,
+    }
+    Ok(())
+}
+
+/// A vertex at the closest point of triangle `t` (barycentric `bary`): a corner within `d`,
+/// else a split of an edge within `d`, else a trisection. `None` when refused or vetoed.
+fn counterpart_on_triangle(
+    mesh: &mut LabeledMesh,
+    attrs: &mut VertexAttributes,
+    guard: &mut dyn EditGuard,
+    t: TriId,
+    bary: [f64; 3],
+    d: f64,
+    report: &mut MergeReport,
+) -> Result<Option<VertexId>, MergeError> {
+    let verts = mesh.tri(t);
+    let x = mesh.tri_positions(t);
+    let point = x[0] * bary[0] + x[1] * bary[1] + x[2] * bary[2];
+    // Nearest corner within d.
+    if let Some(k) = (0..3)
+        .filter(|&k| (x[k] - point).length() <= d)
+        .min_by(|&i, &j| (x[i] - point).length().total_cmp(&(x[j] - point).length()))
+    {
+        return Ok(Some(verts[k]));
+    }
+    // Nearest edge within d: split it at the projection of the point.
+    let on_edge = |i: usize, j: usize| {
+        let e = x[j] - x[i];
+        let s = ((point - x[i]).dot(e) / e.length_squared()).clamp(0.0, 1.0);
+        (s, (x[i] + e * s - point).length())
+    };
+    if let Some((i, j, s, _)) = [(0, 1), (1, 2), (2, 0)]
+        .into_iter()
+        .map(|(i, j)| {
+            let (s, dist) = on_edge(i, j);
+            (i, j, s, dist)
+        })
+        .filter(|e| e.3 <= d)
+        .min_by(|a, b| a.3.total_cmp(&b.3))
+    {
+        return split_edge(mesh, attrs, guard, verts[i], verts[j], s, report);
+    }
+    match split_triangle_at(mesh, attrs, guard, t, bary) {
+        Ok(v) => {
+            report.face_splits += 1;
+            Ok(Some(v))
+        }
+        Err(e) => {
+            count_failure(SnapError::Edit(e), report)?;
+            Ok(None)
+        }
+    }
+}
+
+/// A vertex at parameter `s` of edge `{a, b}`: an end within `d`, else a split there.
+#[allow(clippy::too_many_arguments)]
+fn counterpart_on_edge(
+    mesh: &mut LabeledMesh,
+    attrs: &mut VertexAttributes,
+    guard: &mut dyn EditGuard,
+    a: VertexId,
+    b: VertexId,
+    s: f64,
+    d: f64,
+    report: &mut MergeReport,
+) -> Result<Option<VertexId>, MergeError> {
+    let len = (mesh.position(b) - mesh.position(a)).length();
+    if s * len <= d {
+        return Ok(Some(a));
+    }
+    if (1.0 - s) * len <= d {
+        return Ok(Some(b));
+    }
+    split_edge(mesh, attrs, guard, a, b, s, report)
+}
+
+fn split_edge(
+    mesh: &mut LabeledMesh,
+    attrs: &mut VertexAttributes,
+    guard: &mut dyn EditGuard,
+    a: VertexId,
+    b: VertexId,
+    s: f64,
+    report: &mut MergeReport,
+) -> Result<Option<VertexId>, MergeError> {
+    match split_edge_at(mesh, attrs, guard, a, b, s) {
+        Ok(v) => {
+            report.edge_splits += 1;
+            Ok(Some(v))
+        }
+        Err(e) => {
+            count_failure(SnapError::Edit(e), report)?;
+            Ok(None)
+        }
+    }
+}
+
+/// Counts a refused or vetoed step; a capacity error stops the merge.
+fn count_failure(e: SnapError, report: &mut MergeReport) -> Result<(), MergeError> {
+    match e {
+        SnapError::Edit(EditError::Vetoed(_)) => report.vetoed += 1,
+        SnapError::Edit(EditError::Mesh(m)) => return Err(m.into()),
+        SnapError::Edit(EditError::Malformed(_)) | SnapError::Refused(_) => report.refused += 1,
+    }
+    Ok(())
+}
+
+fn add_degenerate(sum: &mut DegenerateReport, r: &DegenerateReport) {
+    sum.collapsed_removed += r.collapsed_removed;
+    sum.pairs_relabelled += r.pairs_relabelled;
+    sum.pairs_removed += r.pairs_removed;
+    sum.vertices_removed += r.vertices_removed;
+    sum.vetoed += r.vetoed;
+    sum.unresolved = r.unresolved;
+}
+
+/// Number of bounded region shells per label.
+fn bounded_shells(mesh: &LabeledMesh) -> BTreeMap<Label, usize> {
+    let mut count = BTreeMap::new();
+    for s in mesh.regions().bounded() {
+        *count.entry(s.label).or_insert(0) += 1;
+    }
+    count
+}
+
+/// The unordered label pairs of the mesh's triangles.
+fn interfaces(mesh: &LabeledMesh) -> BTreeSet<[Label; 2]> {
+    mesh.triangles()
+        .map(|t| {
+            let [a, b] = mesh.labels(t);
+            if a < b { [a, b] } else { [b, a] }
+        })
+        .collect()
+}
+
+/// Mean length of the triangles' edges (each interior edge counted once per triangle).
+fn mean_edge_length(mesh: &LabeledMesh) -> f64 {
+    let (sum, n) = mesh.triangles().fold((0.0, 0usize), |(sum, n), t| {
+        let [a, b, c] = mesh.tri_positions(t);
+        let l = |p: DVec3, q: DVec3| (p - q).length();
+        (sum + l(a, b) + l(b, c) + l(c, a), n + 3)
+    });
+    if n == 0 { 0.0 } else { sum / n as f64 }
+}

@@ -11,7 +11,8 @@
 //! - [`features`]: vertex classification (quadric tensor, feature curves) and null space;
 //! - [`split`], [`flip`], [`collapse`], [`smooth`]: the mesh-improvement operations
 //!   (El Topo §3.5–3.6);
-//! - [`improve`]: the driver that sweeps them to keep edge lengths in range.
+//! - [`improve`]: the driver that sweeps them to keep edge lengths in range;
+//! - [`snap`]: vertex snapping and splits at given points (Los Topos §7.1 merging).
 //!
 //! `fixtures` (tests only) holds hand-built scenes shared with `tests/remesh_topology.rs`.
 
@@ -29,6 +30,7 @@ pub mod pinch;
 pub mod region_graph;
 pub mod separate;
 pub mod smooth;
+pub mod snap;
 pub mod split;
 
 pub use attributes::{Blend, VertexAttributes};
@@ -46,4 +48,7 @@ pub use separate::{
     separate_irregular_vertices,
 };
 pub use smooth::{SmoothOutcome, SmoothParams, smooth_vertices};
+pub use snap::{
+    SnapError, SnapParams, SnapRefusal, snap_vertices, split_edge_at, split_triangle_at,
+};
 pub use split::{SplitPlacement, split_edge};

@@ -1,0 +1,358 @@
+//! The checks of the pseudo-motion: CCD of every swept triangle against the static rest of
+//! the mesh and against the other swept triangles, and the exact point-in-tetrahedron tests
+//! (Los Topos §5's tunnelling test, El Topo §3.5.2's flip test).
+
+use glam::DVec3;
+use mesh_core::broadphase::Aabb;
+use mesh_core::predicates::{Sign, orient3d};
+use mesh_core::remesh::{Edit, VertexRef};
+use mesh_core::{LabeledMesh, TriId};
+
+use super::index::TriangleIndex;
+use super::motion::{Motion, Swept};
+use crate::ccd::{CcdOptions, ccd_edge_edge_with, ccd_vertex_triangle_with};
+use crate::proximity::{proximity_edge_edge, proximity_vertex_triangle};
+
+/// Why the sweep refused an edit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Hit {
+    VertexTriangle,
+    EdgeEdge,
+    Tunnel,
+    FlipVolume,
+    Proximity,
+}
+
+/// A static triangle near a swept one: keys and positions.
+type Near = ([u32; 3], [DVec3; 3]);
+
+/// Reusable buffers of the sweep.
+#[derive(Debug, Default)]
+pub(crate) struct Scratch {
+    candidates: Vec<TriId>,
+    near: Vec<Near>,
+    vertices: Vec<(u32, DVec3)>,
+    edges: Vec<([u32; 2], [DVec3; 2])>,
+    /// CCD queries run (statistics).
+    pub queries: u64,
+}
+
+/// The static rest near `bounds`: live triangles the edit neither deletes nor moves, whose
+/// current box overlaps `bounds`; fills `s.near`, and the distinct vertices and edges.
+fn gather(
+    s: &mut Scratch,
+    index: &TriangleIndex,
+    mesh: &LabeledMesh,
+    edit: &Edit,
+    motion: &Motion,
+    bounds: &Aabb,
+) {
+    s.candidates.clear();
+    index.query(bounds, &mut s.candidates);
+    s.candidates.sort_unstable();
+    s.candidates.dedup();
+    s.near.clear();
+    s.vertices.clear();
+    s.edges.clear();
+    for &t in &s.candidates {
+        if !mesh.is_triangle_alive(t) || edit.remove_tris.contains(&t) || motion.is_moved_kept(t) {
+            continue;
+        }
+        let p = mesh.tri_positions(t);
+        if !Aabb::from_points(&p).overlaps(bounds) {
+            continue;
+        }
+        let key = mesh.tri(t).map(|v| v.raw());
+        s.near.push((key, p));
+        for k in 0..3 {
+            s.vertices.push((key[k], p[k]));
+            let (i, j) = (k, (k + 1) % 3);
+            let (a, b) = if key[i] < key[j] { (i, j) } else { (j, i) };
+            s.edges.push(([key[a], key[b]], [p[a], p[b]]));
+        }
+    }
+    s.vertices.sort_unstable_by_key(|x| x.0);
+    s.vertices.dedup_by(|x, y| x.0 == y.0);
+    s.edges.sort_unstable_by_key(|x| x.0);
+    s.edges.dedup_by(|x, y| x.0 == y.0);
+}
+
+const EDGES: [(usize, usize); 3] = [(0, 1), (1, 2), (2, 0)];
+
+/// CCD of the pseudo-motion, then the swept-tetrahedron test.
+pub(crate) fn check_sweep(
+    s: &mut Scratch,
+    index: &TriangleIndex,
+    mesh: &LabeledMesh,
+    edit: &Edit,
+    motion: &Motion,
+    ccd: &CcdOptions,
+) -> Result<(), Hit> {
+    for (i, t) in motion.swept.iter().enumerate() {
+        gather(s, index, mesh, edit, motion, &t.bounds());
+        // Static vertices against the moving triangle.
+        for &(k, p) in &s.vertices {
+            if t.has(k) {
+                continue;
+            }
+            s.queries += 1;
+            if ccd_vertex_triangle_with(
+                [p, t.x0[0], t.x0[1], t.x0[2]],
+                [p, t.x1[0], t.x1[1], t.x1[2]],
+                ccd,
+            )
+            .is_some()
+            {
+                return Err(Hit::VertexTriangle);
+            }
+        }
+        // Moving vertices against static triangles.
+        for &(key, p) in &s.near {
+            for k in (0..3).filter(|&k| t.moving(k) && !key.contains(&t.key[k])) {
+                s.queries += 1;
+                if ccd_vertex_triangle_with(
+                    [t.x0[k], p[0], p[1], p[2]],
+                    [t.x1[k], p[0], p[1], p[2]],
+                    ccd,
+                )
+                .is_some()
+                {
+                    return Err(Hit::VertexTriangle);
+                }
+            }
+        }
+        // Moving edges against static edges.
+        for (a, b) in EDGES {
+            if !(t.moving(a) || t.moving(b)) {
+                continue;
+            }
+            for &(key, q) in &s.edges {
+                if key.contains(&t.key[a]) || key.contains(&t.key[b]) {
+                    continue;
+                }
+                s.queries += 1;
+                if ccd_edge_edge_with(
+                    [t.x0[a], t.x0[b], q[0], q[1]],
+                    [t.x1[a], t.x1[b], q[0], q[1]],
+                    ccd,
+                )
+                .is_some()
+                {
+                    return Err(Hit::EdgeEdge);
+                }
+            }
+        }
+        // Moving against moving.
+        for u in &motion.swept[i + 1..] {
+            check_swept_pair(s, t, u, ccd)?;
+        }
+        // Los Topos' tunnelling test: a triangle with one moving corner sweeps a
+        // tetrahedron; no vertex may lie strictly inside it. (CCD already covers the
+        // static vertices it does not share; this also covers the vertices that share a
+        // key with it, e.g. the far side of a vertex separation, at their end positions.)
+        if t.movers() == 1 {
+            let k = (0..3).find(|&k| t.moving(k)).unwrap_or(0);
+            let tet = [t.x0[0], t.x0[1], t.x0[2], t.x1[k]];
+            let inside = |key: u32, p: DVec3| !t.has(key) && strictly_inside(&tet, p);
+            if s.vertices.iter().any(|&(key, p)| inside(key, p))
+                || motion
+                    .swept
+                    .iter()
+                    .any(|u| (0..3).any(|j| inside(u.key[j], u.x1[j])))
+            {
+                return Err(Hit::Tunnel);
+            }
+        }
+    }
+    Ok(())
+}
+
+/// CCD between two swept triangles: vertices of each against the other, edges against
+/// edges, skipping pairs that share a key and pairs where nothing moves.
+fn check_swept_pair(s: &mut Scratch, t: &Swept, u: &Swept, ccd: &CcdOptions) -> Result<(), Hit> {
+    if !t.bounds().overlaps(&u.bounds()) {
+        return Ok(());
+    }
+    for (p, q) in [(t, u), (u, t)] {
+        for k in 0..3 {
+            if q.has(p.key[k]) || !(p.moving(k) || (0..3).any(|j| q.moving(j))) {
+                continue;
+            }
+            s.queries += 1;
+            if ccd_vertex_triangle_with(
+                [p.x0[k], q.x0[0], q.x0[1], q.x0[2]],
+                [p.x1[k], q.x1[0], q.x1[1], q.x1[2]],
+                ccd,
+            )
+            .is_some()
+            {
+                return Err(Hit::VertexTriangle);
+            }
+        }
+    }
+    for (a, b) in EDGES {
+        for (c, d) in EDGES {
+            let shared = [t.key[a], t.key[b]]
+                .iter()
+                .any(|k| *k == u.key[c] || *k == u.key[d]);
+            if shared || !(t.moving(a) || t.moving(b) || u.moving(c) || u.moving(d)) {
+                continue;
+            }
+            s.queries += 1;
+            if ccd_edge_edge_with(
+                [t.x0[a], t.x0[b], u.x0[c], u.x0[d]],
+                [t.x1[a], t.x1[b], u.x1[c], u.x1[d]],
+                ccd,
+            )
+            .is_some()
+            {
+                return Err(Hit::EdgeEdge);
+            }
+        }
+    }
+    Ok(())
+}
+
+/// True when `p` lies strictly inside the tetrahedron (exact; a flat tetrahedron has no
+/// inside).
+fn strictly_inside(tet: &[DVec3; 4], p: DVec3) -> bool {
+    let [a, b, c, d] = *tet;
+    let o = orient3d(a, b, c, d);
+    if o == Sign::Zero {
+        return false;
+    }
+    // p is inside when replacing any one corner by p keeps the orientation.
+    orient3d(p, b, c, d) == o
+        && orient3d(a, p, c, d) == o
+        && orient3d(a, b, p, d) == o
+        && orient3d(a, b, c, p) == o
+}
+
+/// El Topo §3.5.2 for edits that move nothing but re-triangulate four vertices (flips):
+/// the old and new triangles bound a tetrahedron, and no mesh vertex may lie inside it.
+/// (An edge crossing it would cross a new triangle, which the end-state check rejects.)
+pub(crate) fn check_retriangulation(
+    s: &mut Scratch,
+    index: &TriangleIndex,
+    mesh: &LabeledMesh,
+    edit: &Edit,
+    motion: &Motion,
+) -> Result<(), Hit> {
+    if edit.add_tris.is_empty() || edit.remove_tris.is_empty() || !edit.new_vertices.is_empty() {
+        return Ok(());
+    }
+    let mut corners = [DVec3::ZERO; 4];
+    let mut keys = [u32::MAX; 4];
+    let mut n = 0;
+    let refs = edit
+        .remove_tris
+        .iter()
+        .flat_map(|&t| mesh.tri(t).map(VertexRef::Old))
+        .chain(edit.add_tris.iter().flat_map(|(v, _)| *v));
+    for r in refs {
+        let key = motion.key(r);
+        if keys[..n.min(4)].contains(&key) {
+            continue;
+        }
+        if n < 4 {
+            keys[n] = key;
+            corners[n] = edit.end_position(mesh, r);
+        }
+        n += 1;
+    }
+    if n != 4 {
+        return Ok(());
+    }
+    gather(s, index, mesh, edit, motion, &Aabb::from_points(&corners));
+    if s.vertices
+        .iter()
+        .any(|&(k, p)| !keys.contains(&k) && strictly_inside(&corners, p))
+    {
+        return Err(Hit::FlipVolume);
+    }
+    Ok(())
+}
+
+/// The minimum-distance option: no non-adjacent pair (a changed triangle's vertex against a
+/// static triangle, a static vertex against a changed triangle, a changed edge against a
+/// static edge) may end closer than `eps` unless it started at least as close. Changed
+/// triangles are the added ones and the kept ones that move; their start is the edit's
+/// start positions.
+pub(crate) fn check_proximity(
+    s: &mut Scratch,
+    index: &TriangleIndex,
+    mesh: &LabeledMesh,
+    edit: &Edit,
+    motion: &Motion,
+    eps: f64,
+) -> Result<(), Hit> {
+    let changed = edit.add_tris.iter().map(|(v, _)| *v).chain(
+        motion
+            .moved_kept
+            .iter()
+            .map(|&t| mesh.tri(t).map(VertexRef::Old)),
+    );
+    for verts in changed {
+        let key = verts.map(|r| motion.key(r));
+        let x1 = verts.map(|r| edit.end_position(mesh, r));
+        let x0 = verts.map(|r| edit.start_position(mesh, r));
+        let bounds = Aabb::from_points(&x1).inflated(eps);
+        gather(s, index, mesh, edit, motion, &bounds);
+        let closer = |d1: f64, d0: f64| d1 < eps && d1 < d0;
+        for &(k, p) in &s.vertices {
+            if !key.contains(&k)
+                && closer(
+                    proximity_vertex_triangle(p, x1).distance,
+                    proximity_vertex_triangle(p, x0).distance,
+                )
+            {
+                return Err(Hit::Proximity);
+            }
+        }
+        for &(skey, q) in &s.near {
+            for j in (0..3).filter(|&j| !skey.contains(&key[j])) {
+                if closer(
+                    proximity_vertex_triangle(x1[j], q).distance,
+                    proximity_vertex_triangle(x0[j], q).distance,
+                ) {
+                    return Err(Hit::Proximity);
+                }
+            }
+        }
+        for (a, b) in EDGES {
+            for &(ekey, q) in &s.edges {
+                if ekey.contains(&key[a]) || ekey.contains(&key[b]) {
+                    continue;
+                }
+                if closer(
+                    proximity_edge_edge(x1[a], x1[b], q[0], q[1]).distance,
+                    proximity_edge_edge(x0[a], x0[b], q[0], q[1]).distance,
+                ) {
+                    return Err(Hit::Proximity);
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn strictly_inside_is_exact_on_the_boundary() {
+        let tet = [DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z];
+        assert!(strictly_inside(&tet, DVec3::splat(0.1)));
+        assert!(
+            !strictly_inside(&tet, DVec3::new(0.2, 0.2, 0.0)),
+            "on a face"
+        );
+        assert!(!strictly_inside(&tet, DVec3::splat(0.5)), "outside");
+        let flat = [DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::new(1.0, 1.0, 0.0)];
+        assert!(!strictly_inside(&flat, DVec3::new(0.2, 0.2, 0.0)));
+        // Orientation of the corners does not matter.
+        let rev = [DVec3::X, DVec3::ZERO, DVec3::Y, DVec3::Z];
+        assert!(strictly_inside(&rev, DVec3::splat(0.1)));
+    }
+}

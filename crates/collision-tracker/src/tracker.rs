@@ -1,0 +1,181 @@
+//! [`CollisionTracker`]: the explicit, collision-safe backend behind
+//! [`mesh_core::SurfaceTracker`] (Los Topos Algorithm 1 on El Topo; the stages are in
+//! `step.rs`, the topological separation stage in `t1t2.rs`).
+//!
+//! The tracker's invariant: between steps its mesh passes `validate()` and is exactly
+//! intersection-free. [`CollisionTracker::new`] checks both on the input (the whole method
+//! rests on starting from an intersection-free state); each step preserves them, and a step
+//! that cannot returns an error and keeps the mesh it started from.
+
+use glam::DVec3;
+use mesh_core::remesh::improve::mean_edge_length;
+use mesh_core::remesh::{ImproveParams, SeparationParams};
+use mesh_core::validate::{ValidateOptions, validate};
+use mesh_core::{LabeledMesh, RegionCensus, StepReport, SurfaceTracker, TrackError};
+
+use crate::merge::MergeOptions;
+use crate::params::{AmbientFlow, CollisionParams};
+use crate::resolve::ResolveOptions;
+use crate::step::{StepConfig, advance_mesh};
+use crate::t1t2::T1T2Options;
+
+/// The collision-safe multi-material tracker (Da et al. 2014 on Brochu & Bridson 2009).
+///
+/// ```no_run
+/// use collision_tracker::{CollisionParams, CollisionTracker};
+/// use mesh_core::{DVec3, Label, SurfaceTracker, generators::icosphere};
+///
+/// let mesh = icosphere(3, DVec3::ZERO, 1.0, [Label::OUTSIDE, Label::new(1)]).unwrap();
+/// let mut tracker: Box<dyn SurfaceTracker> =
+///     Box::new(CollisionTracker::new(mesh, CollisionParams::default()).unwrap());
+/// let proposed: Vec<DVec3> = tracker.mesh().positions().iter().map(|p| *p * 1.01).collect();
+/// let report = tracker.advance(&proposed).unwrap();
+/// println!("{} triangles, {:.3} s", report.triangles, report.total_seconds());
+/// ```
+pub struct CollisionTracker {
+    mesh: LabeledMesh,
+    /// Connected components and bounded shells of `mesh`, carried between steps.
+    count: RegionCensus,
+    params: CollisionParams,
+    /// The target edge length ℓ fixed at construction.
+    target_edge_length: f64,
+    config: StepConfig,
+}
+
+impl CollisionTracker {
+    /// A tracker around `mesh`. The mesh must pass `validate()` including the exact
+    /// self-intersection test, and `params` must pass [`CollisionParams::check`]; otherwise
+    /// [`TrackError::InvalidInput`] names the first problem.
+    pub fn new(mesh: LabeledMesh, params: CollisionParams) -> Result<Self, TrackError> {
+        params
+            .check()
+            .map_err(|e| TrackError::InvalidInput(e.to_string()))?;
+        if mesh.num_triangles() == 0 {
+            return Err(TrackError::InvalidInput(
+                "the mesh has no triangles (nothing to track)".into(),
+            ));
+        }
+        let report = validate(&mesh, &ValidateOptions::with_intersections());
+        if !report.is_valid() {
+            return Err(TrackError::InvalidInput(format!(
+                "the collision tracker needs a valid, intersection-free mesh: {report}"
+            )));
+        }
+        let target = match params.target_edge_length {
+            Some(l) => l,
+            None => mean_edge_length(&mesh),
+        };
+        if !(target.is_finite() && target > 0.0) {
+            return Err(TrackError::InvalidInput(format!(
+                "target edge length {target} (mean edge length of the mesh) is not positive"
+            )));
+        }
+        let config = configure(&params, target);
+        let count = RegionCensus::of(&mesh);
+        Ok(Self {
+            mesh,
+            count,
+            params,
+            target_edge_length: target,
+            config,
+        })
+    }
+
+    /// The parameters in use.
+    pub fn params(&self) -> &CollisionParams {
+        &self.params
+    }
+
+    /// The target edge length ℓ all lengths are relative to (fixed at construction).
+    pub fn target_edge_length(&self) -> f64 {
+        self.target_edge_length
+    }
+
+    /// Sets (or clears) the ambient flow that ranks T1 separations by its divergence along
+    /// the separation direction; call it each step for a time-dependent flow. Without a
+    /// flow, separations are ranked by the surface area they remove.
+    pub fn set_ambient_flow(&mut self, flow: Option<AmbientFlow>) {
+        self.params.ambient_flow = flow.clone();
+        self.config.t1t2.ambient_flow = flow;
+    }
+}
+
+/// Derives each stage's options from the parameters and ℓ, once.
+fn configure(params: &CollisionParams, l: f64) -> StepConfig {
+    let mut resolve = ResolveOptions::for_length(l);
+    resolve.max_halvings = params.max_halvings;
+    if let Some(p) = params.proximity_factor {
+        resolve.proximity = p * l;
+    }
+    let merge = params.merge.then(|| {
+        let mut m = MergeOptions::for_length(l);
+        m.merge_distance = params.merge_distance_factor * l;
+        // Merge what the flow brings together (the step passes each vertex's proposed
+        // displacement as the merge's attributes): at least 1 % of the merge distance per
+        // step, far above the rounding of a rigid motion.
+        m.min_approach = Some(0.01 * m.merge_distance);
+        m
+    });
+    if let Some(m) = &merge {
+        // Colliding surfaces come to rest at half the merge distance, where the merge of
+        // the same step finds them (El Topo's zero-velocity impulse would leave them
+        // wherever they started, up to one step's approach apart, out of merge range).
+        resolve.rest_distance = (0.5 * m.merge_distance).max(resolve.proximity);
+    }
+    let defaults = ImproveParams::default();
+    let improve = ImproveParams {
+        target_edge_length: Some(l),
+        min_edge_factor: params.min_edge_factor,
+        max_edge_factor: params.max_edge_factor,
+        // Collapses must not create edges the next split would cut again.
+        collapse_max_edge_factor: defaults
+            .collapse_max_edge_factor
+            .min(0.9 * params.max_edge_factor),
+        max_volume_change: params.max_volume_change,
+        max_sweeps: params.improve_sweeps,
+        split: params.improve,
+        collapse: params.improve,
+        flip: params.improve,
+        smooth: params.improve,
+        remove_degenerate: params.t2,
+        // Los Topos orders vertex separation after improvement (§5, "Ordering of
+        // Operations"): the t1t2 stage does it, once, over the whole mesh.
+        separate: false,
+        pinch: false,
+        ..defaults
+    };
+    let t1t2 = T1T2Options {
+        t1: params.t1,
+        pinch: params.pinch,
+        t2: params.t2,
+        min_edge_length: params.min_edge_factor * l,
+        max_volume_change: params.max_volume_change.unwrap_or(0.1 * l * l * l),
+        separation: SeparationParams::default(),
+        ambient_flow: params.ambient_flow.clone(),
+    };
+    StepConfig {
+        resolve,
+        merge,
+        improve,
+        t1t2,
+        validation: params.validation,
+        max_displacement: params.max_displacement_factor.map(|f| f * l),
+    }
+}
+
+impl SurfaceTracker for CollisionTracker {
+    fn name(&self) -> &str {
+        "collision"
+    }
+
+    fn mesh(&self) -> &LabeledMesh {
+        &self.mesh
+    }
+
+    fn advance(&mut self, proposed: &[DVec3]) -> Result<StepReport, TrackError> {
+        let (mesh, count, report) = advance_mesh(&self.mesh, &self.count, proposed, &self.config)?;
+        self.mesh = mesh;
+        self.count = count;
+        Ok(report)
+    }
+}
