@@ -42,6 +42,11 @@ impl Blend {
     }
 }
 
+/// Values [`VertexAttributes::apply`] stages on the stack (a split, flip, collapse or
+/// smoothing move with up to a few dozen values per vertex); larger edits allocate. Edits
+/// run by the hundred thousand in `improve`, so the common case must not allocate.
+const STACK_VALUES: usize = 64;
+
 /// `dim` values per vertex slot, following the mesh through edits.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct VertexAttributes {
@@ -102,7 +107,17 @@ impl VertexAttributes {
                 }
             }
         };
-        let mut staged = vec![0.0; dim * (edit.new_vertices.len() + edit.moves.len())];
+        // Staged so that every blend reads the values from before the edit. Edits are small:
+        // the common sizes stay on the stack, only unusually large ones allocate.
+        let len = dim * (edit.new_vertices.len() + edit.moves.len());
+        let mut small = [0.0; STACK_VALUES];
+        let mut large = Vec::new();
+        let staged: &mut [f64] = if len <= STACK_VALUES {
+            &mut small[..len]
+        } else {
+            large.resize(len, 0.0);
+            &mut large
+        };
         let mut chunks = staged.chunks_mut(dim);
         for nv in &edit.new_vertices {
             if let Some(out) = chunks.next() {

@@ -7,8 +7,10 @@
 //! whose end state would make a new or moved triangle intersect the rest of the mesh.
 
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
 
 use glam::DVec3;
+use rayon::prelude::*;
 
 use crate::broadphase::{Aabb, Bvh};
 use crate::ids::TriId;
@@ -40,31 +42,73 @@ impl EditGuard for NoGuard {
     }
 }
 
-/// A triangle of an edit's end state: positions, and vertex keys to recognise shared
-/// vertices (new vertices get keys past the mesh's ids).
-type Keyed = [(u32, DVec3); 3];
+/// A triangle of an edit's end state (or a candidate): vertex keys to recognise shared
+/// vertices (new vertices get keys past the mesh's ids), positions and their box.
+#[derive(Clone, Copy, Debug)]
+struct Keyed {
+    keys: [u32; 3],
+    points: [DVec3; 3],
+    bounds: Aabb,
+}
+
+impl Keyed {
+    #[inline]
+    fn new(keys: [u32; 3], points: [DVec3; 3]) -> Keyed {
+        Keyed {
+            keys,
+            points,
+            bounds: Aabb::from_points(&points),
+        }
+    }
+}
 
 /// Rejects an edit if, in its end state, a triangle it adds or moves intersects (exactly)
 /// any other triangle, except at shared vertices and edges. It checks the end state, not
 /// the sweep: on an intersection-free mesh with small edits (the remeshing case) that keeps
 /// the mesh intersection-free; the collision backend adds the sweep test.
 ///
-/// Candidates come from a BVH over the triangles' boxes, built lazily, plus a hash grid of
-/// the triangles changed since it was built (whose boxes in the BVH may be stale); the BVH
-/// is rebuilt when the changed triangles reach a quarter of the mesh. So a check costs
-/// O(log n) plus the changes near it. The guard learns of changes through
-/// [`EditGuard::committed`]: if the mesh is changed any other way, call
-/// [`StaticIntersectionGuard::reset`].
+/// Candidates come from a BVH over the triangles' boxes grown by a slack (a fraction of the
+/// mean triangle size), built lazily, plus a hash grid of the triangles that left their
+/// grown box or were created since (the *escaped* ones). Why the slack: remeshing moves
+/// most vertices a little (smoothing) and creates triangles near old ones; a triangle that
+/// stays inside the box the BVH holds for its slot needs no bookkeeping at all, so a
+/// smoothing pass over the whole mesh costs no index updates and no rebuilds. The BVH is
+/// rebuilt when the escaped triangles reach a quarter of the mesh.
+///
+/// One check gathers the candidates of the whole edit at once (one query with the box
+/// around its changed triangles), each candidate once, and tests a candidate exactly only
+/// against the changed triangles whose boxes it overlaps. So a check costs O(log n) plus
+/// the edit's neighbourhood. The guard learns of changes through [`EditGuard::committed`]:
+/// if the mesh is changed any other way, call [`StaticIntersectionGuard::reset`].
 #[derive(Debug, Default)]
 pub struct StaticIntersectionGuard {
     index: Option<Bvh>,
-    /// Triangles changed since the BVH was built, at their current boxes.
+    /// The box the BVH holds for each triangle slot (the triangle's box at build time grown
+    /// by the slack; EMPTY for slots dead then).
+    indexed: Vec<Aabb>,
+    /// Triangles changed since the BVH was built whose current box is not inside their
+    /// slot's indexed box, at their current boxes.
     dirty: DirtyGrid,
+    /// Per triangle slot: the number of the last check that saw it (as a candidate, or as
+    /// a triangle the edit removes or moves), so each is looked at once per check.
+    seen: Vec<u32>,
+    /// Number of the current check (`seen` is cleared when it wraps).
+    epoch: u32,
     /// Scratch buffers, kept to avoid allocation per check.
     moved: Vec<TriId>,
     changed: Vec<Keyed>,
     candidates: Vec<TriId>,
 }
+
+/// Slack of the indexed boxes, as a fraction of the mean triangle extent: large enough
+/// that smoothing moves (a fraction of an edge length per pass) rarely push a triangle out
+/// of its indexed box, small enough that grown boxes add few candidates.
+const SLACK: f64 = 0.15;
+
+/// Edits with more changed triangles than this query the index once per triangle instead
+/// of once for the box around them all (which, for a large or spread-out edit, could hold
+/// far more triangles than the separate boxes).
+const MAX_UNION_QUERY: usize = 32;
 
 /// Triangles changed since the BVH was built, bucketed on a uniform grid (cell ≈ a
 /// triangle's size) so that a check looks only at the changes near it. A triangle that
@@ -72,7 +116,7 @@ pub struct StaticIntersectionGuard {
 #[derive(Debug, Default)]
 struct DirtyGrid {
     cell: f64,
-    buckets: HashMap<[i64; 3], Vec<TriId>>,
+    buckets: HashMap<u64, Vec<TriId>, BuildHasherDefault<CellHasher>>,
     /// Triangles too large for a few cells, checked against every query.
     oversize: Vec<TriId>,
     /// Where each changed triangle is filed (by triangle slot).
@@ -102,6 +146,36 @@ fn for_cells(lo: [i64; 3], hi: [i64; 3], mut f: impl FnMut([i64; 3])) {
     }
 }
 
+/// The bucket key of a cell. Distinct cells may share a key; a shared bucket only adds
+/// candidates, which the box test then drops.
+#[inline]
+fn cell_key([x, y, z]: [i64; 3]) -> u64 {
+    (x as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        ^ (y as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F)
+        ^ (z as u64).wrapping_mul(0x1656_67B1_9E37_79F9)
+}
+
+/// Hasher for keys that [`cell_key`] already mixed: one multiply spreads them over the
+/// high bits the hash table uses (the default SipHash costs more than the lookup).
+#[derive(Clone, Copy, Debug, Default)]
+struct CellHasher(u64);
+
+impl Hasher for CellHasher {
+    fn finish(&self) -> u64 {
+        (self.0 ^ (self.0 >> 29)).wrapping_mul(0xBF58_476D_1CE4_E5B9)
+    }
+
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = (self.0.rotate_left(8) ^ u64::from(b)).wrapping_mul(0x0100_0000_01B3);
+        }
+    }
+
+    fn write_u64(&mut self, key: u64) {
+        self.0 ^= key;
+    }
+}
+
 impl DirtyGrid {
     fn reset(&mut self, cell: f64) {
         self.cell = if cell.is_finite() && cell > 0.0 {
@@ -115,15 +189,16 @@ impl DirtyGrid {
         self.distinct = 0;
     }
 
-    /// Integer cell range of a box, or `None` if it is too large (or not finite).
-    fn cells(&self, b: &Aabb) -> Option<([i64; 3], [i64; 3])> {
+    /// Integer cell range of a box, or `None` if it spans more than `max_cells` cells
+    /// (or is not finite).
+    fn cells(&self, b: &Aabb, max_cells: f64) -> Option<([i64; 3], [i64; 3])> {
         let lo = (b.min / self.cell).floor();
         let hi = (b.max / self.cell).floor();
         if !lo.is_finite() || !hi.is_finite() {
             return None;
         }
         let span = hi - lo + 1.0;
-        if span.x * span.y * span.z > MAX_CELLS_PER_BOX as f64 {
+        if span.x * span.y * span.z > max_cells {
             return None;
         }
         Some((
@@ -132,18 +207,29 @@ impl DirtyGrid {
         ))
     }
 
+    fn is_filed(&self, t: TriId) -> bool {
+        self.placed.get(t.idx()).is_some_and(Option::is_some)
+    }
+
     /// Files `t` under box `b`, first removing it from where it was filed before.
     fn insert(&mut self, t: TriId, b: &Aabb) {
         if t.idx() >= self.placed.len() {
             self.placed.resize(t.idx() + 1, None);
         }
+        let placement = self.cells(b, MAX_CELLS_PER_BOX as f64);
+        let new = match placement {
+            Some((lo, hi)) => Placement::Cells(lo, hi),
+            None => Placement::Oversize,
+        };
         match self.placed[t.idx()] {
+            // Same cells: nothing to move.
+            Some(old) if old == new => return,
             None => self.distinct += 1,
             Some(Placement::Oversize) => self.oversize.retain(|&x| x != t),
             Some(Placement::Cells(lo, hi)) => {
                 let buckets = &mut self.buckets;
                 for_cells(lo, hi, |c| {
-                    if let Some(bucket) = buckets.get_mut(&c)
+                    if let Some(bucket) = buckets.get_mut(&cell_key(c))
                         && let Some(i) = bucket.iter().position(|&x| x == t)
                     {
                         bucket.swap_remove(i);
@@ -151,30 +237,30 @@ impl DirtyGrid {
                 });
             }
         }
-        let placement = match self.cells(b) {
-            Some((lo, hi)) => {
+        match new {
+            Placement::Cells(lo, hi) => {
                 let buckets = &mut self.buckets;
-                for_cells(lo, hi, |c| buckets.entry(c).or_default().push(t));
-                Placement::Cells(lo, hi)
+                for_cells(lo, hi, |c| buckets.entry(cell_key(c)).or_default().push(t));
             }
-            None => {
-                self.oversize.push(t);
-                Placement::Oversize
-            }
-        };
-        self.placed[t.idx()] = Some(placement);
+            Placement::Oversize => self.oversize.push(t),
+        }
+        self.placed[t.idx()] = Some(new);
     }
 
-    fn query(&self, b: &Aabb, out: &mut Vec<TriId>) {
-        out.extend_from_slice(&self.oversize);
-        match self.cells(b) {
+    /// Calls `f` for every filed triangle whose cells meet box `b` (possibly repeatedly).
+    fn query(&self, b: &Aabb, mut f: impl FnMut(TriId)) {
+        self.oversize.iter().for_each(|&t| f(t));
+        if self.buckets.is_empty() {
+            return;
+        }
+        // Visiting more cells than there are buckets costs more than visiting every bucket.
+        match self.cells(b, self.buckets.len() as f64) {
             Some((lo, hi)) => for_cells(lo, hi, |c| {
-                if let Some(bucket) = self.buckets.get(&c) {
-                    out.extend_from_slice(bucket);
+                if let Some(bucket) = self.buckets.get(&cell_key(c)) {
+                    bucket.iter().for_each(|&t| f(t));
                 }
             }),
-            // A query box too large for the grid: every changed triangle is a candidate.
-            None => out.extend(self.buckets.values().flatten()),
+            None => self.buckets.values().flatten().for_each(|&t| f(t)),
         }
     }
 }
@@ -188,22 +274,25 @@ impl StaticIntersectionGuard {
     /// Forgets the index, e.g. after the mesh was changed outside `apply_edit`.
     pub fn reset(&mut self) {
         self.index = None;
+        self.indexed.clear();
         self.dirty.reset(1.0);
     }
 
-    /// Builds the BVH if there is none, or if so much has changed since that rebuilding is
-    /// cheaper than carrying the changes.
+    /// Builds the BVH if there is none, or if so much has escaped it since that rebuilding
+    /// is cheaper than carrying the changes.
     fn refresh(&mut self, mesh: &LabeledMesh) {
         let capacity = mesh.triangle_capacity();
-        // Rebuild once a quarter of the mesh has changed: the BVH then misses too much.
+        // Rebuild once a quarter of the mesh has escaped: the grid then holds too much.
         if self.index.is_some() && self.dirty.distinct <= 256 + capacity / 4 {
             return;
         }
-        let boxes: Vec<Aabb> = (0..capacity)
+        let alive = mesh.tri_alive_flags();
+        let mut boxes: Vec<Aabb> = (0..capacity)
+            .into_par_iter()
+            .with_min_len(4096)
             .map(|i| {
-                let t = TriId::new(i as u32);
-                if mesh.is_triangle_alive(t) {
-                    Aabb::from_points(&mesh.tri_positions(t))
+                if alive[i] {
+                    Aabb::from_points(&mesh.tri_positions(TriId::new(i as u32)))
                 } else {
                     Aabb::EMPTY
                 }
@@ -211,40 +300,114 @@ impl StaticIntersectionGuard {
             .collect();
         let live = mesh.num_triangles().max(1) as f64;
         let mean_extent = boxes
-            .iter()
+            .par_iter()
             .filter(|b| !b.is_empty())
             .map(|b| (b.max - b.min).max_element())
             .filter(|e| e.is_finite())
             .sum::<f64>()
             / live;
         self.dirty.reset(mean_extent);
+        let slack = SLACK * mean_extent;
+        if slack.is_finite() && slack > 0.0 {
+            boxes
+                .par_iter_mut()
+                .with_min_len(4096)
+                .filter(|b| !b.is_empty())
+                .for_each(|b| *b = b.inflated(slack));
+        }
         // A build only fails for more boxes than ids, which a mesh cannot have; without an
         // index every triangle goes to the changed set, which is slow but still exact.
         self.index = Bvh::build(&boxes).ok();
-        if self.index.is_none() {
+        if self.index.is_some() {
+            self.indexed = boxes;
+        } else {
+            self.indexed.clear();
             for t in mesh.triangles() {
                 self.dirty.oversize.push(t);
             }
         }
     }
 
-    fn mark_dirty(&mut self, mesh: &LabeledMesh, t: TriId) {
-        if mesh.is_triangle_alive(t) {
-            self.dirty
-                .insert(t, &Aabb::from_points(&mesh.tri_positions(t)));
+    /// Records that triangle `t` changed: nothing if it still lies inside the box the BVH
+    /// holds for its slot (and was not filed as escaped before), else (re)filed.
+    fn track(&mut self, mesh: &LabeledMesh, t: TriId) {
+        if !mesh.is_triangle_alive(t) {
+            return;
         }
+        let b = Aabb::from_points(&mesh.tri_positions(t));
+        let covered = self
+            .indexed
+            .get(t.idx())
+            .is_some_and(|f| f.min.cmple(b.min).all() && b.max.cmple(f.max).all());
+        if !covered || self.dirty.is_filed(t) {
+            self.dirty.insert(t, &b);
+        }
+    }
+
+    /// Starts a check: a fresh epoch, `seen` sized to the mesh.
+    fn next_epoch(&mut self, mesh: &LabeledMesh) {
+        if self.seen.len() < mesh.triangle_capacity() {
+            self.seen.resize(mesh.triangle_capacity(), 0);
+        }
+        self.epoch = self.epoch.wrapping_add(1);
+        if self.epoch == 0 {
+            self.seen.fill(0);
+            self.epoch = 1;
+        }
+    }
+
+    /// Marks `t` seen in this check; false if it already was.
+    #[inline]
+    fn first_sight(&mut self, t: TriId) -> bool {
+        match self.seen.get_mut(t.idx()) {
+            Some(s) if *s != self.epoch => {
+                *s = self.epoch;
+                true
+            }
+            _ => false,
+        }
+    }
+
+    /// Collects, once each, the live triangles (other than those the edit removes or
+    /// moves, which are already marked seen) whose indexed or escaped box meets `b`.
+    fn gather(&mut self, mesh: &LabeledMesh, b: &Aabb) {
+        let Self {
+            index,
+            dirty,
+            seen,
+            epoch,
+            candidates,
+            ..
+        } = self;
+        let mut take = |t: TriId| {
+            if let Some(s) = seen.get_mut(t.idx())
+                && *s != *epoch
+            {
+                *s = *epoch;
+                if mesh.is_triangle_alive(t) {
+                    candidates.push(t);
+                }
+            }
+        };
+        if let Some(index) = index {
+            index.query(b, 0.0, |id| take(TriId::new(id)));
+        }
+        dirty.query(b, take);
     }
 }
 
 impl EditGuard for StaticIntersectionGuard {
     fn check(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), &'static str> {
         self.refresh(mesh);
-        let removed = |t: TriId| edit.remove_tris.contains(&t);
-        // Kept triangles that move with the edit.
+        self.next_epoch(mesh);
+        // The edit's own removed and moved triangles are never candidates.
+        for &t in &edit.remove_tris {
+            self.first_sight(t);
+        }
         self.moved.clear();
         for m in &edit.moves {
             for t in mesh.vertex_triangles(m.vertex) {
-                if !removed(t) && !self.moved.contains(&t) {
+                if self.first_sight(t) {
                     self.moved.push(t);
                 }
             }
@@ -256,35 +419,46 @@ impl EditGuard for StaticIntersectionGuard {
         };
         self.changed.clear();
         for (verts, _) in &edit.add_tris {
-            self.changed
-                .push(verts.map(|r| (key(r), edit.end_position(mesh, r))));
+            self.changed.push(Keyed::new(
+                verts.map(key),
+                verts.map(|r| edit.end_position(mesh, r)),
+            ));
         }
         for &t in &self.moved {
-            self.changed.push(
-                mesh.tri(t)
-                    .map(|v| (v.raw(), edit.end_position(mesh, VertexRef::Old(v)))),
-            );
+            let tri = mesh.tri(t);
+            self.changed.push(Keyed::new(
+                tri.map(|v| v.raw()),
+                tri.map(|v| edit.end_position(mesh, VertexRef::Old(v))),
+            ));
         }
-        for (i, a) in self.changed.iter().enumerate() {
-            let points = a.map(|x| x.1);
-            let bounds = Aabb::from_points(&points);
-            self.candidates.clear();
-            if let Some(index) = &self.index {
-                let candidates = &mut self.candidates;
-                index.query(&bounds, 0.0, |id| candidates.push(TriId::new(id)));
+        let all = self
+            .changed
+            .iter()
+            .fold(Aabb::EMPTY, |u, a| u.union(a.bounds));
+        self.candidates.clear();
+        if self.changed.len() <= MAX_UNION_QUERY {
+            self.gather(mesh, &all);
+        } else {
+            for i in 0..self.changed.len() {
+                let b = self.changed[i].bounds;
+                self.gather(mesh, &b);
             }
-            self.dirty.query(&bounds, &mut self.candidates);
-            for &t in &self.candidates {
-                if !mesh.is_triangle_alive(t) || removed(t) || self.moved.contains(&t) {
-                    continue;
-                }
-                let b = mesh.tri(t).map(|v| (v.raw(), mesh.position(v)));
-                if bounds.overlaps(&Aabb::from_points(&b.map(|x| x.1))) && intersect_keyed(a, &b) {
+        }
+        for &t in &self.candidates {
+            let tri = mesh.tri(t);
+            let c = Keyed::new(tri.map(|v| v.raw()), tri.map(|v| mesh.position(v)));
+            if !c.bounds.overlaps(&all) {
+                continue;
+            }
+            for a in &self.changed {
+                if a.bounds.overlaps(&c.bounds) && intersect_keyed(a, &c) {
                     return Err("end state intersects the mesh");
                 }
             }
+        }
+        for (i, a) in self.changed.iter().enumerate() {
             for b in &self.changed[i + 1..] {
-                if intersect_keyed(a, b) {
+                if a.bounds.overlaps(&b.bounds) && intersect_keyed(a, b) {
                     return Err("end state intersects itself");
                 }
             }
@@ -297,11 +471,11 @@ impl EditGuard for StaticIntersectionGuard {
             return;
         }
         for &t in &applied.triangles {
-            self.mark_dirty(mesh, t);
+            self.track(mesh, t);
         }
         for m in &edit.moves {
             for t in mesh.vertex_triangles(m.vertex) {
-                self.mark_dirty(mesh, t);
+                self.track(mesh, t);
             }
         }
     }
@@ -312,18 +486,17 @@ impl EditGuard for StaticIntersectionGuard {
 fn intersect_keyed(a: &Keyed, b: &Keyed) -> bool {
     let mut shared = [(0usize, 0usize); 3];
     let mut n = 0;
-    for (i, (ka, _)) in a.iter().enumerate() {
-        for (j, (kb, _)) in b.iter().enumerate() {
+    for (i, ka) in a.keys.iter().enumerate() {
+        for (j, kb) in b.keys.iter().enumerate() {
             if ka == kb {
                 shared[n.min(2)] = (i, j);
                 n += 1;
             }
         }
     }
-    let pa = a.map(|x| x.1);
-    let pb = b.map(|x| x.1);
+    let (pa, pb) = (&a.points, &b.points);
     match n {
-        0 => predicates::intersect_triangle_triangle(&pa, &pb),
+        0 => predicates::intersect_triangle_triangle(pa, pb),
         1 => {
             let (i, j) = shared[0];
             predicates::intersect_sharing_vertex(
@@ -346,7 +519,7 @@ mod tests {
     use super::*;
     use crate::generators::icosphere;
     use crate::ids::{Label, VertexId};
-    use crate::remesh::{VertexAttributes, VertexMove, apply_edit};
+    use crate::remesh::{EditError, VertexAttributes, VertexMove, apply_edit};
     use crate::validate::{ValidateOptions, validate};
 
     fn sphere() -> LabeledMesh {
@@ -410,6 +583,87 @@ mod tests {
             }
         }
         assert!(vetoed > 10, "the test must exercise vetoes ({vetoed})");
+        assert!(validate(&mesh, &exact).is_valid());
+    }
+
+    /// Flips and splits reuse triangle slots and create triangles outside the indexed
+    /// boxes; interleaved with large moves, the guard's verdict must still match an exact
+    /// validation of the end state, and the mesh must stay intersection-free.
+    #[test]
+    fn stays_exact_through_flips_splits_and_moves() {
+        use crate::remesh::{FlipParams, SplitPlacement, flip_edge, split_edge};
+        let mut mesh = sphere();
+        let mut guard = StaticIntersectionGuard::new();
+        let mut attrs = VertexAttributes::none();
+        let exact = ValidateOptions::with_intersections();
+        let any_flip = FlipParams {
+            min_improvement: -10.0,
+            ..FlipParams::default()
+        };
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = |n: usize| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 33) as usize % n.max(1)
+        };
+        let (mut flips, mut splits, mut vetoed) = (0, 0, 0);
+        for k in 0..240 {
+            let tris: Vec<TriId> = mesh.triangles().collect();
+            let tri = mesh.tri(tris[next(tris.len())]);
+            let (a, b) = (tri[k % 3], tri[(k + 1) % 3]);
+            match k % 3 {
+                0 => {
+                    // A midpoint split covers exactly the old triangles: always allowed.
+                    split_edge(
+                        &mut mesh,
+                        &mut attrs,
+                        &mut guard,
+                        a,
+                        b,
+                        SplitPlacement::Midpoint,
+                    )
+                    .expect("midpoint split");
+                    splits += 1;
+                }
+                1 => {
+                    let mut trial = mesh.clone();
+                    let unguarded =
+                        flip_edge(&mut trial, &mut attrs, &mut NoGuard, a, b, &any_flip);
+                    let clean = unguarded.is_ok() && validate(&trial, &exact).is_valid();
+                    match flip_edge(&mut mesh, &mut attrs, &mut guard, a, b, &any_flip) {
+                        Ok(()) => {
+                            assert!(clean, "guard allowed an intersecting flip at step {k}");
+                            flips += 1;
+                        }
+                        Err(crate::remesh::FlipError::Edit(EditError::Vetoed(_))) => {
+                            assert!(!clean, "guard vetoed a clean flip at step {k}");
+                            vetoed += 1;
+                        }
+                        Err(_) => assert!(unguarded.is_err(), "refusals agree at step {k}"),
+                    }
+                }
+                _ => {
+                    let p = mesh.position(a);
+                    let to = if next(4) == 0 { -p * 0.8 } else { p * 1.02 };
+                    let mut trial = mesh.clone();
+                    trial.set_position(a, to);
+                    trial.relink_around(a);
+                    let clean = validate(&trial, &exact).is_valid();
+                    match apply_edit(&mut mesh, &mut attrs, &mut guard, &move_edit(a, to)) {
+                        Ok(_) => assert!(clean, "guard allowed an intersecting move at step {k}"),
+                        Err(_) => {
+                            assert!(!clean, "guard vetoed a clean move at step {k}");
+                            vetoed += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert!(
+            flips > 10 && splits > 10 && vetoed > 10,
+            "{flips} {splits} {vetoed}"
+        );
         assert!(validate(&mesh, &exact).is_valid());
     }
 }

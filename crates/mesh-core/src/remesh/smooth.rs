@@ -100,7 +100,7 @@ pub fn smooth_vertices(
     guard: &mut dyn EditGuard,
     params: &SmoothParams,
 ) -> SmoothOutcome {
-    let proposals = propose_moves(mesh, params, None);
+    let proposals = propose_moves(mesh, params, None, None);
     commit_moves(mesh, attrs, guard, params, &proposals)
 }
 
@@ -132,31 +132,42 @@ pub(crate) fn commit_moves(
 /// Displacements `(v, step · projected Laplacian)` worth applying, in increasing vertex
 /// order, computed in parallel. `feature_edges[v]`, when given, is the number of feature
 /// edges at `v` (computed once per sweep by the caller); only vertices with none can move,
-/// so the per-vertex edge walk of [`features::classify_vertex`] is skipped.
+/// so the per-vertex edge walk of [`features::classify_vertex`] is skipped. `only`, when
+/// given, restricts the pass to those vertices (in increasing order, each once): the
+/// driver's later sweeps smooth only where the mesh changed.
 pub(crate) fn propose_moves(
     mesh: &LabeledMesh,
     params: &SmoothParams,
     feature_edges: Option<&[u32]>,
+    only: Option<&[VertexId]>,
 ) -> Vec<(VertexId, DVec3)> {
-    (0..mesh.vertex_capacity() as u32)
-        .into_par_iter()
-        .filter_map(|i| {
-            let v = VertexId::new(i);
-            if !mesh.is_vertex_alive(v) {
-                return None;
-            }
-            let on_curve = match feature_edges {
-                Some(counts) => counts.get(v.idx()).is_none_or(|&c| c > 0),
-                None => features::classify_vertex(mesh, v, &params.features).on_curve(),
-            };
-            if on_curve {
-                return None;
-            }
-            let (kind, d, scale) = vertex_frame(mesh, v, &params.features)?;
-            let d = kind.project(d) * params.step;
-            (d.length() > params.min_relative_move * scale && d.is_finite()).then_some((v, d))
-        })
-        .collect()
+    let propose = |v: VertexId| {
+        if !mesh.is_vertex_alive(v) {
+            return None;
+        }
+        let on_curve = match feature_edges {
+            Some(counts) => counts.get(v.idx()).is_none_or(|&c| c > 0),
+            None => features::classify_vertex(mesh, v, &params.features).on_curve(),
+        };
+        if on_curve {
+            return None;
+        }
+        let (kind, d, scale) = vertex_frame(mesh, v, &params.features)?;
+        let d = kind.project(d) * params.step;
+        (d.length() > params.min_relative_move * scale && d.is_finite()).then_some((v, d))
+    };
+    match only {
+        Some(vertices) => vertices
+            .par_iter()
+            .with_min_len(256)
+            .filter_map(|&v| propose(v))
+            .collect(),
+        None => (0..mesh.vertex_capacity() as u32)
+            .into_par_iter()
+            .with_min_len(256)
+            .filter_map(|i| propose(VertexId::new(i)))
+            .collect(),
+    }
 }
 
 /// The quadric classification, the unprojected area-weighted Laplacian and the local scale
