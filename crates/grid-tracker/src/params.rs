@@ -72,7 +72,9 @@ pub struct GridParams {
     /// Validate the mesh (topology, labels, geometry: layers 1–3 of
     /// [`mesh_core::validate`]) at the end of every step, failing the step if it is not
     /// valid. Default: on in debug builds, off in release builds, where the safety net's
-    /// own check after each rebuild already covers the changed region.
+    /// own check after each rebuild already covers the changed region. With improvement
+    /// on, its result is always checked (and discarded for the step's unimproved mesh if
+    /// invalid), whatever this flag says.
     pub validate_each_step: bool,
 }
 

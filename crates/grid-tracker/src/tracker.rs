@@ -171,7 +171,14 @@ impl GridTracker {
         })?;
         let (mut mesh, mut attrs) = (pass.mesh, pass.attrs);
         let mut edits = 0u64;
+        let mut checked = false;
         if let Some(ip) = &self.params.improve {
+            // The pass's output is valid (its safety net checked it). Improvement moves
+            // vertices next to non-manifold edges, where a fold can reorder the triangles
+            // around an edge inconsistently; a structural check (linear time, a few ms
+            // per 10⁵ triangles) catches that, and the step then keeps the unimproved
+            // mesh rather than fail or return an invalid one.
+            let unimproved = (mesh.clone(), attrs.clone());
             let report = timings.time("improve", || {
                 improve_mesh(
                     &mut mesh,
@@ -190,8 +197,17 @@ impl GridTracker {
                     + r.separations
                     + r.pinched) as u64;
             }
+            let report = timings.time("validate", || validate(&mesh, &ValidateOptions::default()));
+            if !report.is_valid() {
+                tracing::warn!(
+                    "improvement left the mesh invalid; keeping the unimproved mesh: {report}"
+                );
+                (mesh, attrs) = unimproved;
+                edits = 0;
+            }
+            checked = true;
         }
-        if self.params.validate_each_step {
+        if self.params.validate_each_step && !checked {
             let report = timings.time("validate", || validate(&mesh, &ValidateOptions::default()));
             if !report.is_valid() {
                 return Err(TrackError::StageFailed {
