@@ -391,4 +391,4 @@ pub fn correct_labels(
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

@@ -11,15 +11,16 @@ use crate::stages::materials::{MaterialOptions, assign_materials};
 use crate::stages::rebuild::cell_corners;
 use crate::test_util::{sphere, union};
 
-struct Run {
-    grid: Grid,
-    mats: Materials,
-    region: FlawedRegion,
+/// The stages up to §6 on one mesh (shared with the rebuild tests).
+pub(crate) struct Run {
+    pub grid: Grid,
+    pub mats: Materials,
+    pub region: FlawedRegion,
 }
 
 /// Grid, materials and flaws of `mesh`; with `everything`, the region is grown to a box
 /// of cells one layer beyond the band.
-fn run(mesh: &LabeledMesh, ell: f64, everything: bool) -> Run {
+pub(crate) fn run(mesh: &LabeledMesh, ell: f64, everything: bool) -> Run {
     let grid = build_grid(mesh, ell, &GridOptions::default()).unwrap();
     let mats = assign_materials(mesh, &grid, &MaterialOptions::default()).unwrap();
     let mut region = detect_flaws(mesh, &grid, &mats, &FlawOptions::default()).unwrap();

@@ -4,7 +4,7 @@
 
 use std::collections::BTreeSet;
 
-use glam::{DVec3, IVec3};
+use glam::DVec3;
 use mesh_core::geometry::label_volumes;
 use mesh_core::validate::{ValidateOptions, validate};
 use mesh_core::{Label, LabeledMesh, VertexId};
@@ -27,22 +27,8 @@ struct Run {
 /// The pipeline up to §8.1; with `everything`, the region is grown to a box of cells one
 /// layer beyond the band, so the cut removes the whole mesh.
 fn run(mesh: &LabeledMesh, ell: f64, everything: bool) -> Run {
-    let grid = build_grid(mesh, ell, &GridOptions::default()).unwrap();
-    let mats = assign_materials(mesh, &grid, &MaterialOptions::default()).unwrap();
-    let mut region = detect_flaws(mesh, &grid, &mats, &FlawOptions::default()).unwrap();
-    if everything {
-        let [lo, hi] = grid.cell_bounds().unwrap();
-        let (lo, hi) = (lo - IVec3::ONE, hi + IVec3::ONE);
-        let mut all = Vec::new();
-        for z in lo.z..=hi.z {
-            for y in lo.y..=hi.y {
-                for x in lo.x..=hi.x {
-                    all.push(IVec3::new(x, y, z));
-                }
-            }
-        }
-        region.grow(mesh, &grid, &mats, &all);
-    }
+    let crate::stages::labels::tests::Run { grid, mats, region } =
+        crate::stages::labels::tests::run(mesh, ell, everything);
     let labels = correct_labels(mesh, &grid, &mats, &region).unwrap();
     Run {
         grid,
