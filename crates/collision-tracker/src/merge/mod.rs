@@ -36,8 +36,9 @@ use std::collections::{BTreeMap, BTreeSet};
 
 use glam::DVec3;
 use mesh_core::remesh::{
-    DegenerateReport, EditError, EditGuard, SnapError, SnapParams, VertexAttributes,
+    DegenerateReport, EditError, EditGuard, SnapError, SnapParams, SplitRecord, VertexAttributes,
     pinch_singular_vertices, remove_degenerate, snap_vertices, split_edge_at, split_triangle_at,
+    undo_split,
 };
 use mesh_core::{Label, LabeledMesh, MeshError, TriId, VertexId};
 
@@ -103,6 +104,9 @@ pub struct MergeReport {
     pub edge_splits: usize,
     /// Triangles trisected at a closest point.
     pub face_splits: usize,
+    /// Splits undone because the snap they prepared was refused or vetoed (counted in
+    /// `edge_splits` / `face_splits` too).
+    pub undone_splits: usize,
     /// Regions joined: over all labels, the decrease of the number of bounded region
     /// shells of that label (a label whose count grows — e.g. a sliver of the outside
     /// trapped between two merged sheets — adds nothing).
@@ -159,6 +163,10 @@ pub enum MergeError {
     /// The mesh ran out of ids while splitting.
     #[error("mesh capacity exceeded during snap merging: {0}")]
     Mesh(#[from] MeshError),
+    /// A split made for a snap that did not happen could not be undone (a bug: the undo
+    /// restores the state just before the split).
+    #[error("could not undo a split after a refused snap: {0}")]
+    Undo(#[from] EditError),
 }
 
 /// Snap merging (see the [module doc](self)) without vertex attributes.
@@ -274,6 +282,8 @@ fn merge_pair(
         report.same_sheet += usize::from(near);
         near
     };
+    // Splits made for this pair, to undo if its snap does not happen.
+    let mut splits: Vec<(VertexId, SplitRecord)> = Vec::new();
     let sides = match c.pair {
         Pair::VertexTriangle(v, t) => {
             if !mesh.is_vertex_alive(v) || !mesh.is_triangle_alive(t) || mesh.tri(t).contains(&v) {
@@ -286,7 +296,8 @@ fn merge_pair(
                 return Ok(());
             }
             let bary = [-prox.weights[1], -prox.weights[2], -prox.weights[3]];
-            counterpart_on_triangle(mesh, attrs, guard, t, bary, d, report)?.map(|w| (v, w))
+            counterpart_on_triangle(mesh, attrs, guard, t, bary, d, &mut splits, report)?
+                .map(|w| (v, w))
         }
         Pair::EdgeEdge([a, b], [p, q]) => {
             let live = [a, b, p, q].iter().all(|&v| mesh.is_vertex_alive(v))
@@ -302,26 +313,48 @@ fn merge_pair(
                 return Ok(());
             }
             let (s, u) = (prox.weights[1], -prox.weights[3]);
-            let first = counterpart_on_edge(mesh, attrs, guard, a, b, s, d, report)?;
+            let first = counterpart_on_edge(mesh, attrs, guard, a, b, s, d, &mut splits, report)?;
             let second = match first {
-                Some(_) => counterpart_on_edge(mesh, attrs, guard, p, q, u, d, report)?,
+                Some(_) => {
+                    counterpart_on_edge(mesh, attrs, guard, p, q, u, d, &mut splits, report)?
+                }
                 None => None,
             };
             first.zip(second)
         }
     };
-    let Some((keep, other)) = sides else {
-        return Ok(());
+    let snapped = match sides {
+        Some((keep, other)) => {
+            match snap_vertices(mesh, attrs, guard, keep, other, &options.snap) {
+                Ok(_) => {
+                    report.snaps += 1;
+                    true
+                }
+                Err(e) => {
+                    count_failure(e, report)?;
+                    false
+                }
+            }
+        }
+        None => false,
     };
-    match snap_vertices(mesh, attrs, guard, keep, other, &options.snap) {
-        Ok(_) => report.snaps += 1,
-        Err(e) => count_failure(e, report)?,
+    if !snapped {
+        // The splits only prepared this snap: without it they would leave a vertex on one
+        // surface within the merge distance of the other — possibly a rounding error away
+        // from the vertex it was meant to join — for the next step's collision handling
+        // to start from. Undo them, latest first.
+        for (w, record) in splits.iter().rev() {
+            undo_split(mesh, attrs, guard, *w, record)?;
+            report.undone_splits += 1;
+        }
     }
     Ok(())
 }
 
 /// A vertex at the closest point of triangle `t` (barycentric `bary`): a corner within `d`,
 /// else a split of an edge within `d`, else a trisection. `None` when refused or vetoed.
+/// A split is recorded in `splits`.
+#[allow(clippy::too_many_arguments)]
 fn counterpart_on_triangle(
     mesh: &mut LabeledMesh,
     attrs: &mut VertexAttributes,
@@ -329,6 +362,7 @@ fn counterpart_on_triangle(
     t: TriId,
     bary: [f64; 3],
     d: f64,
+    splits: &mut Vec<(VertexId, SplitRecord)>,
     report: &mut MergeReport,
 ) -> Result<Option<VertexId>, MergeError> {
     let verts = mesh.tri(t);
@@ -356,11 +390,13 @@ fn counterpart_on_triangle(
         .filter(|e| e.3 <= d)
         .min_by(|a, b| a.3.total_cmp(&b.3))
     {
-        return split_edge(mesh, attrs, guard, verts[i], verts[j], s, report);
+        return split_edge(mesh, attrs, guard, verts[i], verts[j], s, splits, report);
     }
+    let record = SplitRecord::triangle(mesh, t);
     match split_triangle_at(mesh, attrs, guard, t, bary) {
         Ok(v) => {
             report.face_splits += 1;
+            splits.push((v, record));
             Ok(Some(v))
         }
         Err(e) => {
@@ -380,6 +416,7 @@ fn counterpart_on_edge(
     b: VertexId,
     s: f64,
     d: f64,
+    splits: &mut Vec<(VertexId, SplitRecord)>,
     report: &mut MergeReport,
 ) -> Result<Option<VertexId>, MergeError> {
     let len = (mesh.position(b) - mesh.position(a)).length();
@@ -389,9 +426,11 @@ fn counterpart_on_edge(
     if (1.0 - s) * len <= d {
         return Ok(Some(b));
     }
-    split_edge(mesh, attrs, guard, a, b, s, report)
+    split_edge(mesh, attrs, guard, a, b, s, splits, report)
 }
 
+/// Splits edge `{a, b}` at `s`, recording the split in `splits`.
+#[allow(clippy::too_many_arguments)]
 fn split_edge(
     mesh: &mut LabeledMesh,
     attrs: &mut VertexAttributes,
@@ -399,11 +438,14 @@ fn split_edge(
     a: VertexId,
     b: VertexId,
     s: f64,
+    splits: &mut Vec<(VertexId, SplitRecord)>,
     report: &mut MergeReport,
 ) -> Result<Option<VertexId>, MergeError> {
+    let record = SplitRecord::edge(mesh, a, b);
     match split_edge_at(mesh, attrs, guard, a, b, s) {
         Ok(v) => {
             report.edge_splits += 1;
+            splits.push((v, record));
             Ok(Some(v))
         }
         Err(e) => {

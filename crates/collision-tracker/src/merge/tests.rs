@@ -193,3 +193,32 @@ fn only_approaching_surfaces_merge_under_the_approach_gate() {
         }
     }
 }
+
+/// Vetoes every snap (an edit that deletes a vertex onto another), allows the rest.
+struct VetoSnaps;
+
+impl mesh_core::remesh::EditGuard for VetoSnaps {
+    fn check(&mut self, _m: &LabeledMesh, e: &mesh_core::remesh::Edit) -> Result<(), &'static str> {
+        if e.remove_vertices.is_empty() || e.moves.is_empty() {
+            Ok(())
+        } else {
+            Err("no snaps in this test")
+        }
+    }
+}
+
+#[test]
+fn splits_for_a_vetoed_snap_are_undone() {
+    let (m0, o) = facing_spheres(0.003, 1, 1, 0.5);
+    let mut m = m0.clone();
+    let r = snap_merge(&mut m, &o, &mut VetoSnaps).expect("merge");
+    assert_eq!(r.snaps, 0, "{r:?}");
+    assert!(r.edge_splits + r.face_splits > 0, "{r:?}");
+    assert_eq!(r.undone_splits, r.edge_splits + r.face_splits, "{r:?}");
+    assert_eq!(m.num_vertices(), m0.num_vertices());
+    assert_eq!(m.num_triangles(), m0.num_triangles());
+    for v in m0.vertices() {
+        assert_eq!(m.position(v), m0.position(v));
+    }
+    assert_valid_and_clean(&m);
+}

@@ -49,6 +49,7 @@ pub use separate::{
 };
 pub use smooth::{SmoothOutcome, SmoothParams, smooth_vertices};
 pub use snap::{
-    SnapError, SnapParams, SnapRefusal, snap_vertices, split_edge_at, split_triangle_at,
+    SnapError, SnapParams, SnapRefusal, SplitRecord, snap_vertices, split_edge_at,
+    split_triangle_at, undo_split,
 };
 pub use split::{SplitPlacement, split_edge};

@@ -23,7 +23,7 @@
 
 use glam::DVec3;
 
-use crate::ids::{TriId, VertexId};
+use crate::ids::{Label, TriId, VertexId};
 use crate::mesh::LabeledMesh;
 
 use super::attributes::{Blend, VertexAttributes};
@@ -273,6 +273,91 @@ pub fn split_triangle_at(
     apply_edit(mesh, attrs, guard, &edit).map(|applied| applied.vertices[0])
 }
 
+/// The triangles a split replaced, kept so that [`undo_split`] can put them back when the
+/// snap the split prepared does not happen. Without it, a vetoed snap would leave the new
+/// vertex where it was born — on the far side of a proximate pair, arbitrarily close to
+/// the vertex it was meant to join — and the next collision step would start with two
+/// elements in contact.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SplitRecord {
+    replaced: Vec<([VertexId; 3], [Label; 2])>,
+    /// Triangles around the new vertex right after the split.
+    fan: usize,
+}
+
+impl SplitRecord {
+    /// Records the triangles on edge `{a, b}` before [`split_edge_at`] splits it.
+    pub fn edge(mesh: &LabeledMesh, a: VertexId, b: VertexId) -> Self {
+        let replaced: Vec<_> = mesh
+            .edge_triangles(a, b)
+            .map(|t| (mesh.tri(t), mesh.labels(t)))
+            .collect();
+        let fan = 2 * replaced.len();
+        Self { replaced, fan }
+    }
+
+    /// Records triangle `t` before [`split_triangle_at`] trisects it.
+    pub fn triangle(mesh: &LabeledMesh, t: TriId) -> Self {
+        Self {
+            replaced: vec![(mesh.tri(t), mesh.labels(t))],
+            fan: 3,
+        }
+    }
+}
+
+/// Undoes the split that created `vertex`, which must be the last edit applied since
+/// `record` was taken: the triangles around `vertex` are replaced by the recorded ones and
+/// `vertex` is deleted. The guard is told of the change but not asked: the result is the
+/// mesh before the split, which was already accepted.
+///
+/// Errors: [`EditError::Malformed`] when `vertex` is dead or its triangles do not use only
+/// the recorded triangles' vertices (the split was not the last edit).
+pub fn undo_split(
+    mesh: &mut LabeledMesh,
+    attrs: &mut VertexAttributes,
+    guard: &mut dyn EditGuard,
+    vertex: VertexId,
+    record: &SplitRecord,
+) -> Result<(), EditError> {
+    if !mesh.is_vertex_alive(vertex) {
+        return Err(EditError::Malformed(format!(
+            "no split vertex {vertex} to undo"
+        )));
+    }
+    let mut edit = Edit::default();
+    edit.remove_tris.extend(mesh.vertex_triangles(vertex));
+    let known = |v: VertexId| v == vertex || record.replaced.iter().any(|(t, _)| t.contains(&v));
+    if edit.remove_tris.len() != record.fan
+        || !edit
+            .remove_tris
+            .iter()
+            .all(|&t| mesh.tri(t).into_iter().all(known))
+    {
+        return Err(EditError::Malformed(format!(
+            "vertex {vertex} is not the last split of the recorded triangles"
+        )));
+    }
+    for &(tri, labels) in &record.replaced {
+        edit.add_tris.push((tri.map(VertexRef::Old), labels));
+    }
+    edit.remove_vertices.push(vertex);
+    apply_edit(mesh, attrs, &mut Trusted(guard), &edit).map(|_| ())
+}
+
+/// Forwards commits to the wrapped guard without asking it: for edits that restore a
+/// state the guard already accepted.
+struct Trusted<'a>(&'a mut dyn EditGuard);
+
+impl EditGuard for Trusted<'_> {
+    fn check(&mut self, _mesh: &LabeledMesh, _edit: &Edit) -> Result<(), &'static str> {
+        Ok(())
+    }
+
+    fn committed(&mut self, mesh: &LabeledMesh, edit: &Edit, applied: &super::edit::Applied) {
+        self.0.committed(mesh, edit, applied);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -322,6 +407,51 @@ mod tests {
             )
             .expect("snap");
         }
+    }
+
+    /// Live triangles as sorted `(corners, labels)`, rotated to start at the smallest id.
+    fn triangle_set(m: &LabeledMesh) -> Vec<([VertexId; 3], [Label; 2])> {
+        let mut out: Vec<_> = m
+            .triangles()
+            .map(|t| {
+                let mut c = m.tri(t);
+                let k = (0..3).min_by_key(|&k| c[k]).unwrap_or(0);
+                c.rotate_left(k);
+                (c, m.labels(t))
+            })
+            .collect();
+        out.sort();
+        out
+    }
+
+    #[test]
+    fn undone_splits_restore_the_triangles_and_the_vertex_count() {
+        let m0 = icosphere(1, DVec3::ZERO, 1.0, [Label::OUTSIDE, Label::new(1)]).expect("sphere");
+        let mut m = m0.clone();
+        let mut attrs = VertexAttributes::none();
+        let t = m.triangles().next().expect("triangle");
+        let record = SplitRecord::triangle(&m, t);
+        let w = split_triangle_at(&mut m, &mut attrs, &mut NoGuard, t, [0.2, 0.3, 0.5])
+            .expect("trisect");
+        assert_ne!(triangle_set(&m), triangle_set(&m0));
+        undo_split(&mut m, &mut attrs, &mut NoGuard, w, &record).expect("undo");
+        assert_eq!(triangle_set(&m), triangle_set(&m0));
+        assert_eq!(m.num_vertices(), m0.num_vertices());
+        assert!(validate(&m, &ValidateOptions::with_intersections()).is_valid());
+
+        let [a, b, _] = m.tri(m.triangles().next().expect("triangle"));
+        let record = SplitRecord::edge(&m, a, b);
+        let w = split_edge_at(&mut m, &mut attrs, &mut NoGuard, a, b, 0.3).expect("split");
+        undo_split(&mut m, &mut attrs, &mut NoGuard, w, &record).expect("undo");
+        assert_eq!(triangle_set(&m), triangle_set(&m0));
+        assert!(validate(&m, &ValidateOptions::with_intersections()).is_valid());
+
+        // A record that does not describe the vertex's split is refused, mesh unchanged.
+        let w = split_edge_at(&mut m, &mut attrs, &mut NoGuard, a, b, 0.5).expect("split");
+        let other = SplitRecord::triangle(&m, m.triangles().next().expect("triangle"));
+        let before = triangle_set(&m);
+        assert!(undo_split(&mut m, &mut attrs, &mut NoGuard, w, &other).is_err());
+        assert_eq!(triangle_set(&m), before);
     }
 
     #[test]
