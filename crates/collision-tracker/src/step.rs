@@ -45,6 +45,9 @@ pub(crate) struct StepConfig {
     pub validation: StepValidation,
     /// Largest displacement allowed in one step (absolute), if bounded.
     pub max_displacement: Option<f64>,
+    /// Remeshing and T1/T2 edits may not leave non-adjacent elements closer than this
+    /// (the guard's minimum distance; see [`CollisionGuard::set_min_distance`]).
+    pub min_separation: f64,
 }
 
 /// Runs Algorithm 1 on a clone of `mesh` and returns the new mesh with its report, or the
@@ -86,6 +89,10 @@ pub(crate) fn advance_mesh(
         }
         report.time_stage("merge", clock.elapsed());
     }
+
+    // Merging brought elements together on purpose; from here on nothing may leave two
+    // of them a rounding error apart, where the next step's CCD would start in contact.
+    guard.set_min_distance(Some(config.min_separation));
 
     if config.improve.split || config.improve.collapse || config.improve.flip {
         let clock = Instant::now();

@@ -11,7 +11,9 @@ use glam::DVec3;
 use mesh_core::remesh::improve::mean_edge_length;
 use mesh_core::remesh::{ImproveParams, SeparationParams};
 use mesh_core::validate::{ValidateOptions, validate};
-use mesh_core::{LabeledMesh, RegionCensus, StepReport, SurfaceTracker, TrackError};
+use mesh_core::{
+    LabeledMesh, RegionCensus, StepReport, SurfaceTracker, TrackError, check_proposal,
+};
 
 use crate::merge::MergeOptions;
 use crate::params::{AmbientFlow, CollisionParams};
@@ -160,6 +162,8 @@ fn configure(params: &CollisionParams, l: f64) -> StepConfig {
         t1t2,
         validation: params.validation,
         max_displacement: params.max_displacement_factor.map(|f| f * l),
+        // Far below the repulsion distance (10⁻³ ℓ), far above rounding.
+        min_separation: 1e-6 * l,
     }
 }
 
@@ -173,6 +177,9 @@ impl SurfaceTracker for CollisionTracker {
     }
 
     fn advance(&mut self, proposed: &[DVec3]) -> Result<StepReport, TrackError> {
+        // Refuse malformed proposals before any stage sees them (shared with the grid
+        // backend; the mesh is untouched on this error).
+        check_proposal(&self.mesh, proposed)?;
         let (mesh, count, report) = advance_mesh(&self.mesh, &self.count, proposed, &self.config)?;
         self.mesh = mesh;
         self.count = count;

@@ -36,8 +36,12 @@
 //!    through the flip.
 //! 5. **Minimum distance** (optional, [`CollisionGuardOptions::min_distance`] `= Some(ε)`):
 //!    no pair of non-adjacent elements involving a changed triangle (added or moved) may
-//!    end closer than `ε` unless it already started at least that close. Off by default:
-//!    snap merging deliberately brings elements together.
+//!    end closer than `ε` unless it already started at least that close (elements with a
+//!    vertex the edit creates get no such allowance: a split vertex starts where it ends).
+//!    Off by default: snap merging deliberately brings elements together. Steps 1–4
+//!    cannot see the danger this covers: an edit that leaves two elements a rounding
+//!    error apart without intersecting is collision-free, but every later motion of them
+//!    starts in contact as far as continuous collision detection can tell.
 //!
 //! Candidates come from a BVH over the triangles plus a list of the triangles changed
 //! since it was built (rebuilt when the list grows past a fraction of the mesh), kept
@@ -121,6 +125,13 @@ impl CollisionGuard {
     /// The options in use.
     pub fn options(&self) -> &CollisionGuardOptions {
         &self.options
+    }
+
+    /// Switches the minimum-distance check (step 5) on or off between stages, e.g. off for
+    /// snap merging, which brings elements together on purpose, and on for the remeshing
+    /// after it.
+    pub fn set_min_distance(&mut self, min_distance: Option<f64>) {
+        self.options.min_distance = min_distance;
     }
 
     /// Counts of checks and vetoes so far.

@@ -277,7 +277,7 @@ pub(crate) fn check_retriangulation(
 /// static triangle, a static vertex against a changed triangle, a changed edge against a
 /// static edge) may end closer than `eps` unless it started at least as close. Changed
 /// triangles are the added ones and the kept ones that move; their start is the edit's
-/// start positions.
+/// start positions. Elements with a vertex the edit creates get no such allowance.
 pub(crate) fn check_proximity(
     s: &mut Scratch,
     index: &TriangleIndex,
@@ -298,12 +298,19 @@ pub(crate) fn check_proximity(
         let x0 = verts.map(|r| edit.start_position(mesh, r));
         let bounds = Aabb::from_points(&x1).inflated(eps);
         gather(s, index, mesh, edit, motion, &bounds);
-        let closer = |d1: f64, d0: f64| d1 < eps && d1 < d0;
+        // A pair that started at least as close is the flow's, not the edit's — except
+        // for elements with a new vertex: a split vertex "starts" where it ends, so its
+        // start distance says nothing about what the mesh had before; a split that puts
+        // an element within `eps` of another is the edit's doing.
+        let born = verts.map(|r| matches!(r, VertexRef::New(_)));
+        let closer = |d1: f64, d0: f64, new: bool| d1 < eps && (new || d1 < d0);
+        let new_tri = born.iter().any(|&b| b);
         for &(k, p) in &s.vertices {
             if !key.contains(&k)
                 && closer(
                     proximity_vertex_triangle(p, x1).distance,
                     proximity_vertex_triangle(p, x0).distance,
+                    new_tri,
                 )
             {
                 return Err(Hit::Proximity);
@@ -314,6 +321,7 @@ pub(crate) fn check_proximity(
                 if closer(
                     proximity_vertex_triangle(x1[j], q).distance,
                     proximity_vertex_triangle(x0[j], q).distance,
+                    born[j],
                 ) {
                     return Err(Hit::Proximity);
                 }
@@ -327,6 +335,7 @@ pub(crate) fn check_proximity(
                 if closer(
                     proximity_edge_edge(x1[a], x1[b], q[0], q[1]).distance,
                     proximity_edge_edge(x0[a], x0[b], q[0], q[1]).distance,
+                    born[a] || born[b],
                 ) {
                     return Err(Hit::Proximity);
                 }

@@ -242,6 +242,49 @@ fn minimum_distance_option_refuses_close_approaches() {
     assert!(strict.check(&mesh, &move_edit(v, p * 0.99)).is_ok());
 }
 
+/// A split vertex starts where it ends, so "it started at least that close" cannot excuse
+/// it: a split whose new vertex lands within the minimum distance of another surface is
+/// refused (the state the next step's CCD would find in contact), and allowed without the
+/// option.
+#[test]
+fn minimum_distance_refuses_a_split_vertex_born_next_to_another_surface() {
+    let big = sphere(1, DVec3::ZERO, 1.0, [0, 1]);
+    let a = top(&big);
+    let b = neighbour(&big, a);
+    let mid = (big.position(a) + big.position(b)) * 0.5;
+    let n = mid.normalize();
+    // A small tetrahedron with one corner 1e-5 outside the chord's midpoint.
+    let tip = mid + n * 1e-5;
+    let (u, w) = (
+        n.any_orthonormal_vector(),
+        n.cross(n.any_orthonormal_vector()),
+    );
+    let tet = LabeledMesh::from_raw(
+        vec![
+            tip,
+            tip + n * 0.1 + u * 0.05,
+            tip + n * 0.1 - u * 0.03 + w * 0.05,
+            tip + n * 0.1 - u * 0.03 - w * 0.05,
+        ],
+        &[[0, 2, 1], [0, 1, 3], [1, 2, 3], [2, 0, 3]],
+        &[[0, 2]; 4],
+    )
+    .expect("tet");
+    let mesh = union(&[big, tet]);
+    assert_eq!(intersections(&mesh), 0);
+    let split = |guard: &mut CollisionGuard| {
+        let mut m = mesh.clone();
+        mesh_core::remesh::split_edge_at(&mut m, &mut VertexAttributes::none(), guard, a, b, 0.5)
+    };
+    assert!(split(&mut CollisionGuard::new()).is_ok());
+    let mut strict = CollisionGuard::with_options(CollisionGuardOptions {
+        min_distance: Some(1e-3),
+        ..CollisionGuardOptions::default()
+    });
+    assert!(split(&mut strict).is_err());
+    assert_eq!(strict.stats().vetoed_proximity, 1);
+}
+
 /// A coarse sphere and a small one hovering over an edge midpoint, in the gap between the
 /// coarse sphere's chord and the round surface the butterfly split restores: unguarded,
 /// improvement pushes the split vertex into the small sphere; guarded, the split falls
