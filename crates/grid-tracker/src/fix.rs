@@ -163,6 +163,7 @@ pub fn fix_with(mesh: &LabeledMesh, options: &FixOptions) -> Result<FixOutcome, 
     )?;
     let stats: PassStats = pass.stats;
     let mut out = pass.mesh;
+    timings.check_budget(params.time_budget, "pass")?;
     let mut improve_edits = 0;
     if let Some(ip) = &params.improve {
         let r = timings.time("improve", || {

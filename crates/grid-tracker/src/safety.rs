@@ -221,16 +221,25 @@ pub(crate) fn intersecting_pairs(mesh: &LabeledMesh, changed: Option<&[TriId]>) 
 
 /// The cells where the triangles of each pair can meet: those meeting the intersection
 /// of the two triangles' boxes.
+///
+/// Memory stays proportional to the distinct cells, not to pairs × cells: many pairs
+/// (a thousand overlapping shapes) name the same cells over and over, so the list is
+/// deduplicated whenever it has doubled since the last time.
 pub(crate) fn pair_cells(
     mesh: &LabeledMesh,
     lattice: &Lattice,
     pairs: &[[TriId; 2]],
 ) -> Vec<IVec3> {
     let mut cells = Vec::new();
+    let mut distinct = 0;
     for &[a, b] in pairs {
         let ba = Aabb::from_points(&mesh.tri_positions(a));
         let bb = Aabb::from_points(&mesh.tri_positions(b));
         box_cells(lattice, ba.min.max(bb.min), ba.max.min(bb.max), &mut cells);
+        if cells.len() > 2 * distinct + (1 << 16) {
+            dedup(&mut cells);
+            distinct = cells.len();
+        }
     }
     dedup(&mut cells);
     cells

@@ -13,6 +13,20 @@
 //! The tracker works on a copy: any error leaves the previous mesh and attributes exactly
 //! as they were. Proposals may be arbitrarily large (teleporting shapes into each other
 //! is a boolean union): nothing in the step assumes small motion.
+//!
+//! # Resource bounds
+//!
+//! For `n` live triangles and a flawed region of `r` cells, one step holds at most a few
+//! copies of the mesh (`O(n)`: the working copy, the unimproved fallback, the compacted
+//! result) plus the sparse grid, whose cell–triangle incidences are counted before it is
+//! allocated and capped at `GridOptions::max_cell_entries` (2²⁶ by default; a tiny ℓ or
+//! a huge triangle is a typed `GridError::TooManyCells` / `TooFine`, not an out-of-memory
+//! abort). Time: the grid, material and flaw stages are linear in those incidences; the
+//! cut → rebuild loop runs at most `max_safety_rounds + max_subcell_rounds + 1` times,
+//! each roughly linear in `r` and the triangles it touches, plus a linear validation; mesh
+//! improvement is bounded by its sweep count. So every step terminates, and with
+//! [`GridParams::time_budget`] it also returns within the budget plus one stage
+//! ([`TrackError::TimeBudgetExceeded`]).
 
 use std::time::Instant;
 
@@ -25,7 +39,7 @@ use mesh_core::{
 };
 
 use crate::params::GridParams;
-use crate::pipeline::{PassStats, Timings, improve_mesh, run_pass};
+use crate::pipeline::{PassStats, PipelineError, Timings, improve_mesh, run_pass};
 
 /// The grid tracker (Heiss-Synak et al. 2024): lets the mesh tangle, then repairs the
 /// flawed regions from a multi-material implicit surface on a sparse background grid,
@@ -155,6 +169,8 @@ impl GridTracker {
     ) -> Result<(LabeledMesh, VertexAttributes, PassStats, u64), TrackError> {
         let mut moved = self.mesh.clone();
         let changed = timings.time("move", || move_vertices(&mut moved, proposed));
+        let budget = self.params.time_budget;
+        timings.check_budget(budget, "move").map_err(stage_failed)?;
         let seed = self.params.step_seed(self.step);
         let pass = run_pass(
             moved,
@@ -165,10 +181,7 @@ impl GridTracker {
             seed,
             timings,
         )
-        .map_err(|e| TrackError::StageFailed {
-            stage: e.stage(),
-            reason: e.to_string(),
-        })?;
+        .map_err(stage_failed)?;
         let (mut mesh, mut attrs) = (pass.mesh, pass.attrs);
         let mut edits = 0u64;
         let mut checked = false;
@@ -216,7 +229,23 @@ impl GridTracker {
                 });
             }
         }
+        timings
+            .check_budget(budget, if checked { "validate" } else { "pass" })
+            .map_err(stage_failed)?;
         Ok((mesh, attrs, pass.stats, edits))
+    }
+}
+
+/// A pipeline error as the trait's error: an exceeded budget keeps its own variant.
+fn stage_failed(e: PipelineError) -> TrackError {
+    match e {
+        PipelineError::TimeBudget { stage, budget } => {
+            TrackError::TimeBudgetExceeded { stage, budget }
+        }
+        e => TrackError::StageFailed {
+            stage: e.stage(),
+            reason: e.to_string(),
+        },
     }
 }
 

@@ -24,10 +24,11 @@ pub(super) fn run(args: &GenerateArgs) -> anyhow::Result<ExitCode> {
         mesh: copies_input,
     };
     let mesh = build_scene(&args.scene, &options)?;
-    super::write_mesh_file(&mesh, &args.out, args.binary)?;
+    // Refuse before writing, so a failed generate leaves no empty file behind.
     if mesh.num_triangles() == 0 {
         bail!("scene `{}` produced an empty mesh", args.scene);
     }
+    super::write_mesh_file(&mesh, &args.out, args.binary)?;
     println!(
         "wrote {} ({} vertices, {} triangles, labels {:?})",
         args.out.display(),

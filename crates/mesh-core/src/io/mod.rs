@@ -48,6 +48,15 @@
 //! `[front, back] = [0, 1]` (outward normals: inside is material 1) or `[1, 0]` if its
 //! enclosed volume is negative (inward normals).
 //!
+//! # Coordinates
+//!
+//! Every finite `f64` is a valid coordinate, whatever its magnitude (1e15 and 1e-15
+//! included): the readers keep the values bit for bit and leave scale to the consumer.
+//! NaN and ±infinity (also decimal text that overflows to infinity, like `1e400`) are
+//! [`IoErrorKind::NonFinite`] naming the vertex. Whether a tracker can work at a given
+//! scale is its own typed decision (the grid backend refuses a cell size below the `f64`
+//! spacing at the mesh's coordinates).
+//!
 //! # Writing
 //!
 //! Writers write the live mesh densely renumbered ([`LabeledMesh::to_raw`]). Positions are
