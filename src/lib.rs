@@ -110,6 +110,47 @@ pub struct TrackerOptions {
     pub validate_each_step: Option<bool>,
 }
 
+/// Every option of both backends, as data: the full [`grid_tracker::GridParams`] and
+/// [`collision_tracker::CollisionParams`]. Serialisable (serde, every field optional on
+/// input), so a scenario file or a run record can carry exactly the options a run used,
+/// and [`make_tracker_from`] can rebuild the same tracker from it.
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct BackendOptions {
+    /// Options of the grid backend (used when the backend is [`Backend::Grid`]).
+    pub grid: grid_tracker::GridParams,
+    /// Options of the collision backend (used when the backend is [`Backend::Collision`]).
+    pub collision: collision_tracker::CollisionParams,
+}
+
+/// Makes a tracker of the chosen backend around an initial mesh with the full options of
+/// that backend taken from `options` (the other backend's are ignored).
+///
+/// Errors: as [`make_tracker_with`]; out-of-range options are reported by the backend as
+/// an invalid input naming the field.
+pub fn make_tracker_from(
+    backend: Backend,
+    mesh: LabeledMesh,
+    options: &BackendOptions,
+) -> Result<Box<dyn SurfaceTracker>, BackendError> {
+    if let Some(reason) = backend.unavailable_reason() {
+        return Err(BackendError::Unavailable { backend, reason });
+    }
+    let invalid = |e: TrackError| BackendError::InvalidInput { backend, error: e };
+    match backend {
+        Backend::Grid => {
+            let tracker =
+                grid_tracker::GridTracker::new(mesh, options.grid.clone()).map_err(invalid)?;
+            Ok(Box::new(tracker))
+        }
+        Backend::Collision => {
+            let tracker = collision_tracker::CollisionTracker::new(mesh, options.collision.clone())
+                .map_err(invalid)?;
+            Ok(Box::new(tracker))
+        }
+    }
+}
+
 /// Makes a tracker of the chosen backend around an initial mesh, with default parameters.
 pub fn make_tracker(
     backend: Backend,
@@ -128,40 +169,19 @@ pub fn make_tracker_with(
     mesh: LabeledMesh,
     options: &TrackerOptions,
 ) -> Result<Box<dyn SurfaceTracker>, BackendError> {
-    if let Some(reason) = backend.unavailable_reason() {
-        return Err(BackendError::Unavailable { backend, reason });
+    let mut full = BackendOptions::default();
+    full.grid.cell_size = options.length_scale;
+    full.grid.seed = options.seed;
+    full.collision.target_edge_length = options.length_scale;
+    if let Some(v) = options.validate_each_step {
+        full.grid.validate_each_step = v;
+        full.collision.validation = if v {
+            collision_tracker::StepValidation::Structure
+        } else {
+            collision_tracker::StepValidation::Off
+        };
     }
-    let invalid = |e: TrackError| BackendError::InvalidInput { backend, error: e };
-    match backend {
-        Backend::Grid => {
-            let mut params = grid_tracker::GridParams {
-                cell_size: options.length_scale,
-                seed: options.seed,
-                ..Default::default()
-            };
-            if let Some(v) = options.validate_each_step {
-                params.validate_each_step = v;
-            }
-            let tracker = grid_tracker::GridTracker::new(mesh, params).map_err(invalid)?;
-            Ok(Box::new(tracker))
-        }
-        Backend::Collision => {
-            let mut params = collision_tracker::CollisionParams {
-                target_edge_length: options.length_scale,
-                ..Default::default()
-            };
-            if let Some(v) = options.validate_each_step {
-                params.validation = if v {
-                    collision_tracker::StepValidation::Structure
-                } else {
-                    collision_tracker::StepValidation::Off
-                };
-            }
-            let tracker =
-                collision_tracker::CollisionTracker::new(mesh, params).map_err(invalid)?;
-            Ok(Box::new(tracker))
-        }
-    }
+    make_tracker_from(backend, mesh, &full)
 }
 
 /// The README's Rust examples, compiled and run as doctests so that they stay true.

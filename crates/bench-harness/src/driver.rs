@@ -17,14 +17,17 @@ use std::time::Instant;
 use indicatif::ProgressBar;
 use mesh_core::LabeledMesh;
 use mesh_core::validate::{ValidateOptions, validate};
-use surftrack::{Backend, BackendError, SurfaceTracker, make_tracker};
+use surftrack::{Backend, BackendError, SurfaceTracker, make_tracker_from};
 use tracing::{debug, info, warn};
 
+use crate::options::RunOptions;
+use crate::preservation::{Preservation, Reference, measure};
 use crate::record::{
-    EventCounts, Failure, FailureReason, FrameRecord, MeshSummary, RUN_SCHEMA, RunRecord,
-    StepRecord, add_stage_seconds,
+    EventCounts, Failure, FailureReason, FrameRecord, LabelVolume, MeshSummary, RUN_SCHEMA,
+    RunRecord, SceneParams, StepRecord, add_stage_seconds,
 };
-use crate::scenes::{SceneError, SceneOptions, build_tracked};
+use crate::scenes::rolling::{self, RollingMotion};
+use crate::scenes::{SceneError, SceneOptions, build_tracked_with};
 
 /// Longest failure message kept in a record (validation reports can list thousands of
 /// offenders; the first lines say enough).
@@ -57,6 +60,10 @@ pub struct RunConfig {
     pub max_triangles: Option<usize>,
     /// Also run the exact self-intersection layer of `validate()` on every step.
     pub check_intersections: bool,
+    /// Every backend and flow option ([`RunOptions`]); recorded in the run record.
+    pub run_options: RunOptions,
+    /// The scene parameters as given, recorded for replays.
+    pub scene_params: SceneParams,
 }
 
 /// Why a run could not even start (a failing tracker is not an error: it is a record).
@@ -132,7 +139,10 @@ fn write_frame(
 /// the record of the run, successful or not; `Err` only when the run could not start or
 /// a frame could not be written.
 pub fn run_scene(config: &RunConfig, progress: &ProgressBar) -> Result<RunRecord, RunError> {
-    run_scene_with(config, progress, |mesh| make_tracker(config.backend, mesh))
+    let options = config.run_options.backend_options();
+    run_scene_with(config, progress, |mesh| {
+        make_tracker_from(config.backend, mesh, &options)
+    })
 }
 
 /// [`run_scene`] with another way to make the tracker (a simulator's own backend, or a
@@ -142,9 +152,14 @@ pub fn run_scene_with(
     progress: &ProgressBar,
     make: impl FnOnce(LabeledMesh) -> Result<Box<dyn SurfaceTracker>, BackendError>,
 ) -> Result<RunRecord, RunError> {
-    let scene = build_tracked(&config.scene, &config.options)?;
+    let scene = build_tracked_with(&config.scene, &config.options, &config.run_options.flow)?;
     let steps = config.steps.unwrap_or(scene.steps);
-    let scene_dt = config.dt.unwrap_or(scene.dt);
+    // The rolling scene's motion spans a fixed duration, whatever the number of steps.
+    let scene_dt = match (config.dt, scene.name) {
+        (Some(dt), _) => dt,
+        (None, "rolling") => rolling::DURATION / steps.max(1) as f64,
+        (None, _) => scene.dt,
+    };
     if !(scene_dt.is_finite() && scene_dt > 0.0) {
         return Err(RunError::Config(format!(
             "--dt must be finite and positive, got {scene_dt}"
@@ -192,7 +207,14 @@ pub fn run_scene_with(
         },
         frames: Vec::new(),
         per_step: Vec::with_capacity(steps),
+        options: Some(config.run_options.clone()),
+        scene_params: Some(config.scene_params.clone()),
+        threads: rayon::current_num_threads(),
+        volumes: Vec::new(),
+        preservation: None,
+        final_digest: None,
     };
+    let initial_mesh = scene.mesh.clone();
     let _span =
         tracing::info_span!("run", scene = scene.name, tracker = config.backend.name()).entered();
     info!(
@@ -334,12 +356,122 @@ pub fn run_scene_with(
     }
     record.wall_seconds = start.elapsed().as_secs_f64();
     record.success = record.failure.is_none() && record.steps_completed == steps;
+    let last = tracker.mesh();
+    record.volumes = label_volumes(&initial_mesh, last);
+    record.preservation = Some(preservation(
+        scene.name,
+        &config.options,
+        &initial_mesh,
+        last,
+        t,
+    ));
+    record.final_digest = Some(mesh_digest(last));
     info!(
         success = record.success,
         seconds = record.wall_seconds,
         "run finished"
     );
     Ok(record)
+}
+
+/// Per-label volumes of the initial and the last mesh (label 0 excluded).
+fn label_volumes(initial: &LabeledMesh, last: &LabeledMesh) -> Vec<LabelVolume> {
+    let before = mesh_core::geometry::label_volumes(initial);
+    let after = mesh_core::geometry::label_volumes(last);
+    let mut labels: Vec<mesh_core::Label> = before.keys().chain(after.keys()).copied().collect();
+    labels.sort_unstable();
+    labels.dedup();
+    labels
+        .into_iter()
+        .filter(|l| *l != mesh_core::Label::OUTSIDE)
+        .map(|l| {
+            let initial = before.get(&l).copied().unwrap_or(0.0);
+            let last = after.get(&l).copied().unwrap_or(0.0);
+            LabelVolume {
+                label: l.raw(),
+                initial,
+                last,
+                relative_drift: if initial != 0.0 {
+                    (last - initial) / initial
+                } else {
+                    0.0
+                },
+            }
+        })
+        .collect()
+}
+
+/// Feature preservation of the last mesh at time `t` ([`crate::preservation`]): against
+/// the rigidly moved original for `rolling`, against the unmoved original otherwise.
+fn preservation(
+    scene: &str,
+    options: &SceneOptions,
+    initial: &LabeledMesh,
+    last: &LabeledMesh,
+    t: f64,
+) -> Preservation {
+    let (lo, hi) = initial.vertices().map(|v| initial.position(v)).fold(
+        (glam::DVec3::INFINITY, glam::DVec3::NEG_INFINITY),
+        |(lo, hi), p| (lo.min(p), hi.max(p)),
+    );
+    let size = if lo.is_finite() && hi.is_finite() {
+        (hi - lo).length()
+    } else {
+        1.0
+    };
+    let tolerance = 1e-9 * size.max(f64::MIN_POSITIVE);
+    let search = 2.0 * mesh_core::remesh::improve::mean_edge_length(initial);
+    let reference = if scene == "rolling" {
+        let motion = RollingMotion::new(options.radius.unwrap_or(rolling::RADIUS));
+        let margin = 0.25 * motion.radius;
+        let mut expected = initial.positions().to_vec();
+        let mut contact = vec![false; initial.vertex_capacity()];
+        for v in initial.vertices() {
+            let p0 = initial.position(v);
+            expected[v.idx()] = motion.place(RollingMotion::sphere_of(p0), p0, t);
+            contact[v.idx()] = motion.in_contact_zone(p0, margin);
+        }
+        Reference {
+            initial,
+            expected,
+            contact: Some(contact),
+        }
+    } else {
+        Reference {
+            initial,
+            expected: initial.positions().to_vec(),
+            contact: None,
+        }
+    };
+    measure(&reference, last, tolerance, search)
+}
+
+/// FNV-1a over the live vertices (slot, position bits) and triangles (slot, vertices,
+/// labels): equal digests mean bit-identical meshes.
+pub fn mesh_digest(mesh: &LabeledMesh) -> String {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |x: u64| {
+        for b in x.to_le_bytes() {
+            h ^= u64::from(b);
+            h = h.wrapping_mul(0x0100_0000_01b3);
+        }
+    };
+    for v in mesh.vertices() {
+        eat(v.idx() as u64);
+        for c in mesh.position(v).to_array() {
+            eat(c.to_bits());
+        }
+    }
+    for t in mesh.triangles() {
+        eat(t.idx() as u64);
+        for v in mesh.tri(t) {
+            eat(v.idx() as u64);
+        }
+        for l in mesh.labels(t) {
+            eat(u64::from(l.raw()));
+        }
+    }
+    format!("{h:016x}")
 }
 
 #[cfg(test)]
@@ -415,6 +547,8 @@ mod tests {
             ascii: false,
             max_triangles: None,
             check_intersections: true,
+            run_options: RunOptions::default(),
+            scene_params: SceneParams::default(),
         }
     }
 

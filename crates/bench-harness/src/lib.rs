@@ -10,17 +10,23 @@
 //! | [`scenes`] | built-in scenes: initial mesh + flow + time step ([`scenes::build_tracked`]) |
 //! | [`driver`] | one scene through one backend in this process ([`driver::run_scene`]) |
 //! | [`isolate`] | the same in a child process under a watchdog (time-out, memory cap) |
+//! | [`options`] | every backend and flow option as data: scenario files, `--set`, records |
+//! | [`preservation`] | untouched fraction and feature distance (2024 paper Fig. 17) |
 //! | [`bench`](mod@bench) | the robustness benchmark (2024 paper §9.6) and the backend comparison |
+//! | [`ablate`] | research ablations: option variants × seeds, isolated, summarised per variant |
 //! | [`record`] | the JSON records (`run.json`, `robustness.json`, `compare.json`) and shard merging |
 //! | [`report`] | markdown tables and SVG plots |
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+pub mod ablate;
 pub mod bench;
 pub mod cli;
 pub mod driver;
 pub mod flows;
 pub mod isolate;
+pub mod options;
+pub mod preservation;
 pub mod record;
 pub mod report;
 pub mod scenes;

@@ -23,6 +23,12 @@
 //! | `initial` | object | `{"vertices", "triangles", "valid"}` of the mesh handed to the tracker |
 //! | `frames` | array | `[{"step": k, "file": "frame_0000.ply"}]` written frames, relative to the record |
 //! | `per_step` | array | one [`StepRecord`] per finished step |
+//! | `options` | object | effective options ([`RunOptions`]: `grid`, `collision`, `flow`) |
+//! | `scene_params` | object | `count`, `resolution`, `radius`, `mesh` as given (null: default) |
+//! | `threads` | integer | rayon threads of the run |
+//! | `volumes` | array | `[{"label", "initial", "last", "relative_drift"}]` per material |
+//! | `preservation` | object | untouched triangles and feature distance ([`Preservation`]) |
+//! | `final_digest` | string | digest of the final mesh (equal digests: the same mesh) |
 //!
 //! A [`StepRecord`] holds `step` (1-based), `t` (time at the start of the step), `dt`,
 //! `seconds` (wall time of proposal + advance), `stages`, `triangles`, `vertices`,
@@ -44,6 +50,9 @@ use std::collections::BTreeMap;
 
 use mesh_core::{StepReport, TopologyEvents};
 use serde::{Deserialize, Serialize};
+
+use crate::options::RunOptions;
+use crate::preservation::Preservation;
 
 /// Version tag of `run.json`.
 pub const RUN_SCHEMA: &str = "surftrack.run/1";
@@ -289,6 +298,56 @@ pub struct RunRecord {
     pub frames: Vec<FrameRecord>,
     /// Every finished step.
     pub per_step: Vec<StepRecord>,
+    /// The effective options of the run (both backends and the flows), so that the record
+    /// alone reproduces it (`surftrack run --from-record`). Absent in records of older
+    /// builds.
+    #[serde(default)]
+    pub options: Option<RunOptions>,
+    /// The scene parameters given on the command line (absent: the scene's defaults).
+    #[serde(default)]
+    pub scene_params: Option<SceneParams>,
+    /// Rayon worker threads of the run (results are bit-identical for the same seed,
+    /// options and thread count).
+    #[serde(default)]
+    pub threads: usize,
+    /// Volume per material label, initial and final (label 0, the unbounded outside,
+    /// excluded).
+    #[serde(default)]
+    pub volumes: Vec<LabelVolume>,
+    /// How much of the original surface the run kept ([`crate::preservation`]).
+    #[serde(default)]
+    pub preservation: Option<Preservation>,
+    /// FNV-1a digest (hex) of the final mesh's vertex position bits, triangles and labels:
+    /// two runs with equal digests produced the same mesh.
+    #[serde(default)]
+    pub final_digest: Option<String>,
+}
+
+/// Scene parameters as given (`None`: the scene's default), for replays.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct SceneParams {
+    /// `--count`.
+    pub count: Option<usize>,
+    /// `--resolution`.
+    pub resolution: Option<u32>,
+    /// `--radius`.
+    pub radius: Option<f64>,
+    /// `--mesh` (path as given).
+    pub mesh: Option<String>,
+}
+
+/// One material's volume at the start and the end of a run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LabelVolume {
+    /// The label.
+    pub label: u32,
+    /// Volume of the initial mesh.
+    pub initial: f64,
+    /// Volume of the final mesh.
+    pub last: f64,
+    /// `(last − initial) / initial` (0 when the initial volume is 0).
+    pub relative_drift: f64,
 }
 
 /// The parameters of a robustness benchmark, identical across its shards.

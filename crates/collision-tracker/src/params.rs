@@ -11,6 +11,7 @@ use std::fmt;
 use std::sync::Arc;
 
 use glam::{DMat3, DVec3};
+use serde::{Deserialize, Serialize};
 
 /// The velocity gradient `∂u_i/∂x_j` (row `i`, column `j`) of an ambient flow at a point.
 pub type VelocityGradientFn = dyn Fn(DVec3) -> DMat3 + Send + Sync;
@@ -65,7 +66,8 @@ impl fmt::Debug for AmbientFlow {
 
 /// How much checking the validate stage does after every step. A failed check is an error
 /// and the tracker keeps the mesh from before the step.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum StepValidation {
     /// No check. Only for measurements: the pipeline is built to keep the mesh valid, the
     /// check is what proves it.
@@ -79,7 +81,11 @@ pub enum StepValidation {
 }
 
 /// Parameters of [`crate::CollisionTracker`]; every field has a documented default.
-#[derive(Clone, Debug)]
+///
+/// Serialisable (serde; every field optional on input), so run records and scenario files
+/// carry them; the ambient flow is code, not data, and is skipped.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct CollisionParams {
     /// Target edge length ℓ. Default `None`: the mean edge length of the initial mesh.
     pub target_edge_length: Option<f64>,
@@ -133,8 +139,25 @@ pub struct CollisionParams {
     /// What the validate stage checks. Default [`StepValidation::Structure`].
     pub validation: StepValidation,
     /// The ambient flow whose divergence ranks T1 separations. Default `None`: rank by
-    /// surface-area decrease.
+    /// surface-area decrease. Not serialised (a closure).
+    #[serde(skip)]
     pub ambient_flow: Option<AmbientFlow>,
+    /// Impact zones (El Topo §3.8.2; the fail-safe after the impulse sweeps), inelastic and
+    /// rigid. Default true. Off, collisions the sweeps leave are handled by step halving
+    /// alone, and a step that still collides fails: the ablation of the fail-safe.
+    pub impact_zones: bool,
+    /// El Topo's `collision_safety` toggle. Default true. Off, the proposal is taken as it
+    /// is (no repulsion, no CCD, no impact zones) and remeshing edits are not checked for
+    /// collisions: faster, and the mesh may intersect itself — which the validation then
+    /// reports when it runs the exact layer.
+    pub collision_safety: bool,
+    /// Wall-time budget of one step. Default `None`: unbounded (every loop is bounded, so a
+    /// step ends, but on adversarial input it may take long). With `Some(b)` the budget is
+    /// checked after each stage, so a step overshoots by at most one stage, and running
+    /// out fails the step with [`mesh_core::TrackError::TimeBudgetExceeded`], the mesh
+    /// unchanged.
+    #[serde(with = "mesh_core::tracker::optional_seconds")]
+    pub time_budget: Option<std::time::Duration>,
 }
 
 impl Default for CollisionParams {
@@ -156,6 +179,9 @@ impl Default for CollisionParams {
             max_displacement_factor: Some(8.0),
             validation: StepValidation::Structure,
             ambient_flow: None,
+            impact_zones: true,
+            collision_safety: true,
+            time_budget: None,
         }
     }
 }

@@ -28,7 +28,7 @@ use mesh_core::validate::{ValidateOptions, validate};
 use mesh_core::{LabeledMesh, RegionCensus, StepReport, TrackError, VertexId, check_proposal};
 use rayon::prelude::*;
 
-use crate::guard::CollisionGuard;
+use crate::guard::{CollisionGuard, CollisionGuardOptions};
 use crate::merge::{MergeOptions, snap_merge_with};
 use crate::params::StepValidation;
 use crate::resolve::{ResolveOptions, resolve_step};
@@ -45,9 +45,15 @@ pub(crate) struct StepConfig {
     pub validation: StepValidation,
     /// Largest displacement allowed in one step (absolute), if bounded.
     pub max_displacement: Option<f64>,
+    /// Wall-time budget of one step, checked after each stage.
+    pub time_budget: Option<std::time::Duration>,
     /// Remeshing and T1/T2 edits may not leave non-adjacent elements closer than this
     /// (the guard's minimum distance; see [`CollisionGuard::set_min_distance`]).
     pub min_separation: f64,
+    /// El Topo's `collision_safety`: off, the proposal is taken without collision
+    /// resolution and remeshing edits are not checked (the ablation; the mesh may then
+    /// intersect itself).
+    pub collision_safety: bool,
 }
 
 /// Runs Algorithm 1 on a clone of `mesh` and returns the new mesh with its report, or the
@@ -63,13 +69,33 @@ pub(crate) fn advance_mesh(
     if let Some(limit) = config.max_displacement {
         check_displacement(mesh, proposed, limit)?;
     }
+    let started = Instant::now();
+    let budget = |stage: &'static str| within_budget(started, config.time_budget, stage);
     let mut report = StepReport::default();
     let mut work = mesh.clone();
 
     let mut motion = VertexAttributes::zeros(mesh, 3);
-    report.substeps = resolve(&mut work, proposed, config, &mut motion, &mut report)?;
+    report.substeps = if config.collision_safety {
+        resolve(&mut work, proposed, config, &mut motion, &mut report)?
+    } else {
+        // Ablation (El Topo's collision_safety off): move straight to the proposal.
+        let clock = Instant::now();
+        let live: Vec<VertexId> = work.vertices().collect();
+        for &v in &live {
+            let wanted = proposed[v.idx()] - work.position(v);
+            motion.get_mut(v).copy_from_slice(&wanted.to_array());
+            work.set_position(v, proposed[v.idx()]);
+        }
+        relink_non_manifold_edges(&mut work);
+        report.time_stage("resolve", clock.elapsed());
+        1
+    };
+    budget("resolve")?;
 
-    let mut guard = CollisionGuard::new();
+    let mut guard = CollisionGuard::with_options(CollisionGuardOptions {
+        unchecked: !config.collision_safety,
+        ..CollisionGuardOptions::default()
+    });
 
     let mut count = before.clone();
     if let Some(options) = &config.merge {
@@ -88,6 +114,7 @@ pub(crate) fn advance_mesh(
             count = after;
         }
         report.time_stage("merge", clock.elapsed());
+        budget("merge")?;
     }
 
     // Merging brought elements together on purpose; from here on nothing may leave two
@@ -99,6 +126,7 @@ pub(crate) fn advance_mesh(
         let improved = improve(&mut work, &config.improve, &mut motion, &mut guard);
         count_improvement(&improved, &mut report);
         report.time_stage("improve", clock.elapsed());
+        budget("improve")?;
     }
 
     let clock = Instant::now();
@@ -106,6 +134,7 @@ pub(crate) fn advance_mesh(
     add_counts(&mut report.events, &counts);
 
     report.time_stage("t1t2", clock.elapsed());
+    budget("t1t2")?;
 
     let clock = Instant::now();
     // Improvement, T1 and T2 after the merge stage: a T1 pulls regions apart; a region
@@ -120,6 +149,20 @@ pub(crate) fn advance_mesh(
     report.vertices = work.num_vertices();
     report.triangles = work.num_triangles();
     Ok((work, after, report))
+}
+
+/// Fails the step once `budget` has run out; `stage` is the stage just finished.
+fn within_budget(
+    started: Instant,
+    budget: Option<std::time::Duration>,
+    stage: &'static str,
+) -> Result<(), TrackError> {
+    match budget {
+        Some(budget) if started.elapsed() >= budget => {
+            Err(TrackError::TimeBudgetExceeded { stage, budget })
+        }
+        _ => Ok(()),
+    }
 }
 
 /// Stage "resolve" (§4.2): the proposal made collision-free (repulsion, CCD impulses,

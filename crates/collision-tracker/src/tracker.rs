@@ -11,9 +11,7 @@ use glam::DVec3;
 use mesh_core::remesh::improve::mean_edge_length;
 use mesh_core::remesh::{ImproveParams, SeparationParams};
 use mesh_core::validate::{ValidateOptions, validate};
-use mesh_core::{
-    LabeledMesh, RegionCensus, StepReport, SurfaceTracker, TrackError, check_proposal,
-};
+use mesh_core::{LabeledMesh, RegionCensus, StepReport, SurfaceTracker, TrackError};
 
 use crate::merge::MergeOptions;
 use crate::params::{AmbientFlow, CollisionParams};
@@ -72,6 +70,7 @@ impl CollisionTracker {
                 "target edge length {target} (mean edge length of the mesh) is not positive"
             )));
         }
+        check_scale(&mesh, target)?;
         let config = configure(&params, target);
         let count = RegionCensus::of(&mesh);
         Ok(Self {
@@ -106,6 +105,11 @@ impl CollisionTracker {
 fn configure(params: &CollisionParams, l: f64) -> StepConfig {
     let mut resolve = ResolveOptions::for_length(l);
     resolve.max_halvings = params.max_halvings;
+    if !params.impact_zones {
+        // Ablation: no impact zones, inelastic or rigid; halving is the only fallback.
+        resolve.max_zone_iterations = 0;
+        resolve.rigid_fallback = false;
+    }
     if let Some(p) = params.proximity_factor {
         resolve.proximity = p * l;
     }
@@ -162,6 +166,8 @@ fn configure(params: &CollisionParams, l: f64) -> StepConfig {
         t1t2,
         validation: params.validation,
         max_displacement: params.max_displacement_factor.map(|f| f * l),
+        time_budget: params.time_budget,
+        collision_safety: params.collision_safety,
         // Far below the repulsion distance (10⁻³ ℓ), far above rounding.
         min_separation: 1e-6 * l,
     }
@@ -177,12 +183,32 @@ impl SurfaceTracker for CollisionTracker {
     }
 
     fn advance(&mut self, proposed: &[DVec3]) -> Result<StepReport, TrackError> {
-        // Refuse malformed proposals before any stage sees them (shared with the grid
-        // backend; the mesh is untouched on this error).
-        check_proposal(&self.mesh, proposed)?;
         let (mesh, count, report) = advance_mesh(&self.mesh, &self.count, proposed, &self.config)?;
         self.mesh = mesh;
         self.count = count;
         Ok(report)
     }
+}
+
+/// Smallest ratio of the target edge length to the largest coordinate magnitude. Below
+/// it the separations the step keeps (10⁻⁶ ℓ, see `min_separation`) come within a few
+/// hundred ulps of the coordinates, and continuous collision detection, which counts
+/// near misses within its rounding bound as contacts, would find contacts everywhere.
+const MIN_LENGTH_TO_COORDINATE: f64 = 1e-7;
+
+/// Refuses a mesh whose edges are too short for its distance from the origin (a unit
+/// mesh translated to 10¹⁵, say), naming both numbers, instead of failing every step.
+fn check_scale(mesh: &LabeledMesh, l: f64) -> Result<(), TrackError> {
+    let extent = mesh
+        .vertices()
+        .map(|v| mesh.position(v).abs().max_element())
+        .fold(0.0, f64::max);
+    if l < MIN_LENGTH_TO_COORDINATE * extent {
+        return Err(TrackError::InvalidInput(format!(
+            "edge length {l:e} is too short for coordinates as large as {extent:e}: the \
+             collision backend needs edges of at least {MIN_LENGTH_TO_COORDINATE:e} × the \
+             largest coordinate (move the mesh towards the origin, or scale it up)"
+        )));
+    }
+    Ok(())
 }

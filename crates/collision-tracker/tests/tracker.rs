@@ -398,3 +398,82 @@ fn spheres_timing() {
         }
     }
 }
+
+/// The ablation toggles take effect: two spheres of different labels pushed far into
+/// each other in one step. With collision safety (the default) the step resolves the
+/// motion and the mesh stays intersection-free; with El Topo's `collision_safety` off the
+/// proposal is taken as it is and the exact check finds the intersections; with impact
+/// zones off the fail-safe is gone, which must not make a clean step fail or intersect.
+#[test]
+fn collision_safety_and_impact_zone_toggles_take_effect() {
+    let mesh = two_spheres([1, 2], 0.05, 2);
+    let push = |m: &LabeledMesh| -> Vec<DVec3> {
+        m.positions()
+            .iter()
+            .map(|&p| p + DVec3::new(if p.x < 0.0 { 0.15 } else { -0.15 }, 0.0, 0.0))
+            .collect()
+    };
+    let mut safe = tracker(mesh.clone(), CollisionParams::default());
+    safe.advance(&push(safe.mesh())).expect("safe step");
+    assert_clean(safe.mesh(), 1);
+
+    let unsafe_params = CollisionParams {
+        collision_safety: false,
+        merge: false,
+        ..CollisionParams::default()
+    };
+    let mut unsafe_tracker = tracker(mesh.clone(), unsafe_params);
+    unsafe_tracker
+        .advance(&push(unsafe_tracker.mesh()))
+        .expect("an unchecked step with structural validation succeeds");
+    let report = validate(
+        unsafe_tracker.mesh(),
+        &ValidateOptions::with_intersections(),
+    );
+    assert!(
+        report.self_intersecting_pairs.map_or(0, |p| p.count) > 0,
+        "without collision safety the spheres pass into each other"
+    );
+
+    let no_zones = CollisionParams {
+        impact_zones: false,
+        ..CollisionParams::default()
+    };
+    let mut t = tracker(mesh, no_zones);
+    let step = |m: &LabeledMesh| -> Vec<DVec3> {
+        m.positions()
+            .iter()
+            .map(|&p| p + DVec3::new(if p.x < 0.0 { 0.01 } else { -0.01 }, 0.0, 0.0))
+            .collect()
+    };
+    run(t.as_mut(), 2, |m, _| step(m));
+}
+
+/// A zero time budget fails the step with the typed error and keeps the mesh; a mesh far
+/// from the origin for its edge length is refused at construction, naming the numbers.
+#[test]
+fn time_budget_and_scale_are_typed_errors() {
+    let mesh = two_spheres([1, 2], 0.2, 1);
+    let params = CollisionParams {
+        time_budget: Some(std::time::Duration::ZERO),
+        ..CollisionParams::default()
+    };
+    let mut t = tracker(mesh.clone(), params);
+    let before = t.mesh().to_raw();
+    let proposed = expand_into_outside(t.mesh(), 0.001);
+    match t.advance(&proposed) {
+        Err(TrackError::TimeBudgetExceeded { .. }) => {}
+        other => panic!("expected TimeBudgetExceeded, got {:?}", other.map(|_| ())),
+    }
+    assert_eq!(t.mesh().to_raw(), before);
+
+    let (p, tris, labels) = mesh.to_raw();
+    // At 1e9 a unit mesh still reads and validates (spacing ~1e-7), but ℓ / 1e9 is far
+    // below the backend's bound.
+    let far: Vec<DVec3> = p.iter().map(|&x| x + DVec3::splat(1e9)).collect();
+    let far = LabeledMesh::from_raw(far, &tris, &labels).expect("still a mesh");
+    match CollisionTracker::new(far, CollisionParams::default()) {
+        Err(TrackError::InvalidInput(msg)) => assert!(msg.contains("too short"), "{msg}"),
+        other => panic!("expected InvalidInput, got {:?}", other.map(|_| ())),
+    }
+}

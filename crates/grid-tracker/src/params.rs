@@ -6,11 +6,15 @@
 //! (safety net §9.2, the sub-ℓ intersection pass that goes beyond the paper).
 
 use mesh_core::remesh::ImproveParams;
+use serde::{Deserialize, Serialize};
 
-use crate::stages::flaws::FlawOptions;
+use crate::stages::flaws::{FlawOptions, Resampling};
+use crate::stages::labels::LabelCorrection;
+use crate::stages::rebuild::RebuildOptions;
 
 /// Which triangles mesh improvement (§8.5) may change.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum ImproveScope {
     /// The whole mesh: a tracker under large deformation (normal flow, stretching) needs
     /// edge lengths kept in range everywhere, not only where topology changed.
@@ -24,7 +28,8 @@ pub enum ImproveScope {
 
 /// What to do about intersections finer than ℓ, which the axis rays cannot see (the
 /// paper's §10 names this as future work).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum SubcellPass {
     /// No exact intersection test: clean above ℓ only, as in the paper.
     Off,
@@ -41,7 +46,11 @@ pub enum SubcellPass {
 
 /// Parameters of [`crate::GridTracker`] (and, through [`crate::FixOptions`], of
 /// [`crate::fix_with`]). Every field has a documented default.
-#[derive(Clone, Debug, PartialEq)]
+///
+/// Serialisable (serde, every field optional on input thanks to `#[serde(default)]`), so a
+/// run record or a scenario file can carry the exact options of a run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct GridParams {
     /// Cell size ℓ, the topological resolution (§4, §9.1). Default `None`: the mean edge
     /// length of the initial mesh, the paper's choice; fixed for the tracker's lifetime so
@@ -59,6 +68,7 @@ pub struct GridParams {
     pub flaws: FlawOptions,
     /// Mesh improvement (§8.5). Default `Some` with edge lengths in 0.5–1.5 ℓ (the
     /// target edge length is forced to ℓ); `None` switches improvement off.
+    #[serde(with = "improve_serde")]
     pub improve: Option<ImproveParams>,
     /// Which triangles improvement may change. Default [`ImproveScope::Whole`].
     pub improve_scope: ImproveScope,
@@ -76,6 +86,24 @@ pub struct GridParams {
     /// on, its result is always checked (and discarded for the step's unimproved mesh if
     /// invalid), whatever this flag says.
     pub validate_each_step: bool,
+    /// Local (the paper) or global resampling (Fig. 17b ablation). Default
+    /// [`Resampling::Local`].
+    pub resampling: Resampling,
+    /// How non-physical grid nodes get their label (§8.1). Default
+    /// [`LabelCorrection::FastMarching`], the paper's.
+    pub label_correction: LabelCorrection,
+    /// Rebuild options (§8.2–8.3), among them the non-manifold curve smoothing steps.
+    /// Default [`RebuildOptions::default`].
+    pub rebuild: RebuildOptions,
+    /// Wall-time budget of one step (or one `fix`). Default `None`: unbounded — every loop
+    /// of a step is bounded by the counters above, so a step always terminates, but on
+    /// adversarial input it may take long. With `Some(b)`, the budget is checked at stage
+    /// boundaries (after each stage and each safety-net or sub-ℓ round) and an exceeded
+    /// budget fails the step with `TrackError::TimeBudgetExceeded` (for `fix`,
+    /// `PipelineError::TimeBudget`), the previous mesh kept: a step overshoots `b` by at
+    /// most the duration of one stage. `Some(Duration::ZERO)` fails every step.
+    #[serde(with = "mesh_core::tracker::optional_seconds")]
+    pub time_budget: Option<std::time::Duration>,
 }
 
 impl Default for GridParams {
@@ -91,6 +119,10 @@ impl Default for GridParams {
             subcell: SubcellPass::Require,
             max_subcell_rounds: 6,
             validate_each_step: cfg!(debug_assertions),
+            resampling: Resampling::Local,
+            label_correction: LabelCorrection::FastMarching,
+            rebuild: RebuildOptions::default(),
+            time_budget: None,
         }
     }
 }
@@ -123,5 +155,268 @@ impl GridParams {
             ));
         }
         Ok(())
+    }
+}
+
+/// Serde for `Option<ImproveParams>` through a mirror struct: mesh-core's
+/// [`ImproveParams`] is not deserialisable, and the grid tracker's options must be, so
+/// that a record can reproduce a run. Every field of the mirror is optional on input
+/// (missing fields take [`ImproveParams::default`]'s values); `null` means improvement off.
+mod improve_serde {
+    use mesh_core::remesh::{FeatureParams, FlipCriterion, ImproveParams, SeparationParams};
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    /// [`FlipCriterion`] by name.
+    #[derive(Clone, Copy, Serialize, Deserialize)]
+    #[serde(rename_all = "snake_case")]
+    enum Flip {
+        Delaunay,
+        ShorterEdge,
+    }
+
+    /// The fields of [`ImproveParams`], flattened one level (features and separation are
+    /// nested tables of two numbers each).
+    #[derive(Clone, Serialize, Deserialize)]
+    #[serde(default, deny_unknown_fields)]
+    struct Mirror {
+        target_edge_length: Option<f64>,
+        min_edge_factor: f64,
+        max_edge_factor: f64,
+        collapse_max_edge_factor: f64,
+        max_volume_change: Option<f64>,
+        max_sweeps: usize,
+        split: bool,
+        butterfly: bool,
+        collapse: bool,
+        flip: bool,
+        smooth: bool,
+        remove_degenerate: bool,
+        separate: bool,
+        pinch: bool,
+        smooth_step: f64,
+        smooth_passes: usize,
+        flip_criterion: Flip,
+        flip_min_improvement: f64,
+        min_normal_cos: f64,
+        feature_rank_ratio: f64,
+        feature_curve_corner_angle_deg: f64,
+        separation_fraction: f64,
+        separation_max_iterations: usize,
+    }
+
+    impl Default for Mirror {
+        fn default() -> Self {
+            Mirror::from(&ImproveParams::default())
+        }
+    }
+
+    impl From<&ImproveParams> for Mirror {
+        fn from(p: &ImproveParams) -> Self {
+            Mirror {
+                target_edge_length: p.target_edge_length,
+                min_edge_factor: p.min_edge_factor,
+                max_edge_factor: p.max_edge_factor,
+                collapse_max_edge_factor: p.collapse_max_edge_factor,
+                max_volume_change: p.max_volume_change,
+                max_sweeps: p.max_sweeps,
+                split: p.split,
+                butterfly: p.butterfly,
+                collapse: p.collapse,
+                flip: p.flip,
+                smooth: p.smooth,
+                remove_degenerate: p.remove_degenerate,
+                separate: p.separate,
+                pinch: p.pinch,
+                smooth_step: p.smooth_step,
+                smooth_passes: p.smooth_passes,
+                flip_criterion: match p.flip_criterion {
+                    FlipCriterion::Delaunay => Flip::Delaunay,
+                    FlipCriterion::ShorterEdge => Flip::ShorterEdge,
+                },
+                flip_min_improvement: p.flip_min_improvement,
+                min_normal_cos: p.min_normal_cos,
+                feature_rank_ratio: p.features.rank_ratio,
+                feature_curve_corner_angle_deg: p.features.curve_corner_angle_deg,
+                separation_fraction: p.separation.separation_fraction,
+                separation_max_iterations: p.separation.max_iterations,
+            }
+        }
+    }
+
+    impl From<Mirror> for ImproveParams {
+        fn from(m: Mirror) -> Self {
+            ImproveParams {
+                target_edge_length: m.target_edge_length,
+                min_edge_factor: m.min_edge_factor,
+                max_edge_factor: m.max_edge_factor,
+                collapse_max_edge_factor: m.collapse_max_edge_factor,
+                max_volume_change: m.max_volume_change,
+                max_sweeps: m.max_sweeps,
+                split: m.split,
+                butterfly: m.butterfly,
+                collapse: m.collapse,
+                flip: m.flip,
+                smooth: m.smooth,
+                remove_degenerate: m.remove_degenerate,
+                separate: m.separate,
+                pinch: m.pinch,
+                smooth_step: m.smooth_step,
+                smooth_passes: m.smooth_passes,
+                flip_criterion: match m.flip_criterion {
+                    Flip::Delaunay => FlipCriterion::Delaunay,
+                    Flip::ShorterEdge => FlipCriterion::ShorterEdge,
+                },
+                flip_min_improvement: m.flip_min_improvement,
+                min_normal_cos: m.min_normal_cos,
+                features: FeatureParams {
+                    rank_ratio: m.feature_rank_ratio,
+                    curve_corner_angle_deg: m.feature_curve_corner_angle_deg,
+                },
+                separation: SeparationParams {
+                    separation_fraction: m.separation_fraction,
+                    max_iterations: m.separation_max_iterations,
+                },
+            }
+        }
+    }
+
+    pub(super) fn serialize<S: Serializer>(
+        value: &Option<ImproveParams>,
+        s: S,
+    ) -> Result<S::Ok, S::Error> {
+        value.as_ref().map(Mirror::from).serialize(s)
+    }
+
+    pub(super) fn deserialize<'de, D: Deserializer<'de>>(
+        d: D,
+    ) -> Result<Option<ImproveParams>, D::Error> {
+        Ok(Option::<Mirror>::deserialize(d)?.map(ImproveParams::from))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec3;
+    use mesh_core::validate::{ValidateOptions, validate};
+    use mesh_core::{LabeledMesh, SurfaceTracker};
+
+    use super::*;
+    use crate::GridTracker;
+    use crate::test_util::{sphere, union};
+
+    /// A sphere with six bumps of 15 % of the radius: surface detail above ℓ that crosses
+    /// grid edges twice (complex edges) but is shallow.
+    fn bumpy_sphere() -> LabeledMesh {
+        let mut mesh = sphere(4, DVec3::ZERO, 1.0, 0, 1);
+        let bumps = [
+            DVec3::X,
+            DVec3::NEG_X,
+            DVec3::Y,
+            DVec3::NEG_Y,
+            DVec3::Z,
+            DVec3::NEG_Z,
+        ]
+        .map(|d| (d + DVec3::new(0.2, 0.3, 0.1)).normalize());
+        let vs: Vec<_> = mesh.vertices().collect();
+        for v in vs {
+            let u = mesh.position(v).normalize();
+            let h: f64 = bumps
+                .iter()
+                .map(|d| {
+                    let a = u.dot(*d).clamp(-1.0, 1.0).acos();
+                    0.15 * (-a * a / (2.0 * 0.12 * 0.12)).exp()
+                })
+                .sum();
+            mesh.set_position(v, u * (1.0 + h));
+        }
+        mesh
+    }
+
+    fn still_step(params: GridParams, mesh: LabeledMesh) -> (GridTracker, usize) {
+        let mut tracker = GridTracker::new(mesh, params).unwrap();
+        let proposed = tracker.mesh().positions().to_vec();
+        tracker.advance(&proposed).unwrap();
+        let cells = tracker.last_pass().map_or(0, |p| p.flawed_cells);
+        (tracker, cells)
+    }
+
+    #[test]
+    fn global_resampling_and_no_deep_test_remesh_what_local_keeps() {
+        let local = GridParams {
+            improve_scope: ImproveScope::Changed,
+            ..GridParams::default()
+        };
+        let mesh = bumpy_sphere();
+        let (kept, cells) = still_step(local.clone(), mesh.clone());
+        assert_eq!(cells, 0, "shallow bumps are kept by the paper's method");
+        assert_eq!(kept.mesh().positions(), mesh.positions());
+
+        let no_deep = GridParams {
+            flaws: FlawOptions {
+                deep_cell_test: false,
+                ..FlawOptions::default()
+            },
+            ..local.clone()
+        };
+        let (t, cells) = still_step(no_deep, mesh.clone());
+        assert!(
+            cells > 0,
+            "without the deep test the bumps' complex cells are remeshed"
+        );
+        assert!(validate(t.mesh(), &ValidateOptions::default()).is_valid());
+
+        let global = GridParams {
+            resampling: Resampling::Global,
+            ..local
+        };
+        let (t, cells) = still_step(global, mesh.clone());
+        assert!(cells > 100, "{cells}");
+        assert!(validate(t.mesh(), &ValidateOptions::default()).is_valid());
+        // No triangle of the input survives a global rebuild.
+        let before: std::collections::HashSet<[u64; 9]> = mesh
+            .triangles()
+            .map(|f| {
+                let p = mesh.tri(f).map(|v| mesh.position(v));
+                std::array::from_fn(|k| p[k / 3].to_array()[k % 3].to_bits())
+            })
+            .collect();
+        let m = t.mesh();
+        let kept = m
+            .triangles()
+            .filter(|&f| {
+                let p = m.tri(f).map(|v| m.position(v));
+                before.contains(&std::array::from_fn(|k| {
+                    p[k / 3].to_array()[k % 3].to_bits()
+                }))
+            })
+            .count();
+        assert_eq!(kept, 0);
+    }
+
+    #[test]
+    fn nearest_vertex_labels_give_a_valid_different_merge() {
+        let a = sphere(3, DVec3::new(-0.55, 0.0, 0.0), 0.5, 0, 1);
+        let b = sphere(3, DVec3::new(0.55, 0.0, 0.0), 0.5, 0, 2);
+        let mesh = union(&[a, b]);
+        let run = |label_correction| {
+            let params = GridParams {
+                label_correction,
+                ..GridParams::default()
+            };
+            let mut tracker = GridTracker::new(mesh.clone(), params).unwrap();
+            // Push both spheres 0.15 into each other.
+            let proposed: Vec<DVec3> = tracker
+                .mesh()
+                .positions()
+                .iter()
+                .map(|p| *p - DVec3::new(0.15 * p.x.signum(), 0.0, 0.0))
+                .collect();
+            tracker.advance(&proposed).unwrap();
+            assert!(validate(tracker.mesh(), &ValidateOptions::default()).is_valid());
+            tracker.mesh().positions().to_vec()
+        };
+        let fast = run(LabelCorrection::FastMarching);
+        let nearest = run(LabelCorrection::NearestVertex);
+        assert_ne!(fast, nearest, "the label correction made no difference");
     }
 }

@@ -29,11 +29,11 @@ use mesh_core::{LabeledMesh, StageTiming, TriId, VertexId};
 use crate::params::{GridParams, ImproveScope, SubcellPass};
 use crate::safety::{add_cells, inconsistency_cells, intersecting_pairs, pair_cells};
 use crate::stages::cut::{CutOptions, cut_mesh};
-use crate::stages::flaws::{FlawError, FlawedRegion, detect_flaws};
+use crate::stages::flaws::{FlawError, FlawedRegion, Resampling, detect_flaws};
 use crate::stages::grid::{Grid, GridError, GridOptions, Lattice, build_grid};
-use crate::stages::labels::correct_labels;
+use crate::stages::labels::correct_labels_with;
 use crate::stages::materials::{MaterialError, MaterialOptions, Materials, assign_materials};
-use crate::stages::rebuild::{RebuildOptions, rebuild_region};
+use crate::stages::rebuild::rebuild_region;
 use crate::stages::transfer::{OldVertices, transfer_pic};
 
 /// Offenders listed per category when the safety net validates a rebuilt mesh: enough to
@@ -62,6 +62,23 @@ impl Timings {
         let out = f();
         self.add(stage, start.elapsed());
         out
+    }
+
+    /// Fails once the seconds timed so far reach `budget` ([`GridParams::time_budget`]);
+    /// called at stage boundaries, so a step overshoots by at most one stage.
+    pub(crate) fn check_budget(
+        &self,
+        budget: Option<Duration>,
+        stage: &'static str,
+    ) -> Result<(), PipelineError> {
+        match budget {
+            Some(budget)
+                if self.stages.iter().map(|s| s.seconds).sum::<f64>() >= budget.as_secs_f64() =>
+            {
+                Err(PipelineError::TimeBudget { stage, budget })
+            }
+            _ => Ok(()),
+        }
     }
 
     /// The timings.
@@ -127,6 +144,14 @@ pub enum PipelineError {
     /// §8.4: attributes could not be transferred.
     #[error("attribute transfer failed: {0}")]
     Transfer(String),
+    /// [`GridParams::time_budget`] ran out; `stage` is the last stage that completed.
+    #[error("time budget of {budget:?} exceeded after stage `{stage}`")]
+    TimeBudget {
+        /// The stage.
+        stage: &'static str,
+        /// The budget.
+        budget: Duration,
+    },
 }
 
 impl PipelineError {
@@ -139,6 +164,7 @@ impl PipelineError {
             PipelineError::Inconsistent { stage, .. } => stage,
             PipelineError::Intersections { .. } => "subcell",
             PipelineError::Transfer(_) => "transfer",
+            PipelineError::TimeBudget { stage, .. } => stage,
         }
     }
 }
@@ -198,11 +224,24 @@ pub(crate) fn run_pass(
     let mut region = timings.time("flaws", || {
         detect_flaws(&moved, &grid, &materials, &params.flaws)
     })?;
+    timings.check_budget(params.time_budget, "flaws")?;
     let mut stats = PassStats {
         cell_size,
         ..PassStats::default()
     };
     let lattice = *grid.lattice();
+
+    // Ablation (Fig. 17b): global resampling rebuilds every cell the surface touches.
+    if params.resampling == Resampling::Global {
+        let cells: Vec<IVec3> = grid
+            .cells()
+            .filter(|&c| !grid.cell_triangles(c).is_empty())
+            .map(|c| grid.cell_coord(c))
+            .collect();
+        timings.time("flaws", || {
+            add_cells(&mut region, &moved, &grid, &materials, &cells)
+        });
+    }
 
     // Beyond the paper: overlaps thinner than ℓ among the moved triangles.
     if params.subcell != SubcellPass::Off {
@@ -219,6 +258,7 @@ pub(crate) fn run_pass(
     // Each iteration either returns or spends one round of one of the two budgets.
     let rounds = params.max_safety_rounds + params.max_subcell_rounds + 1;
     for _ in 0..rounds {
+        timings.check_budget(params.time_budget, "safety")?;
         let attempt = if region.is_empty() {
             // Nothing flawed: the moved mesh is the result if it passes the safety check
             // (a zero-area triangle or a tangled junction finer than the rays can be
@@ -237,7 +277,7 @@ pub(crate) fn run_pass(
                 Err(inc) => Err(inc),
             }
         } else {
-            replace_region(&moved, &grid, &materials, &region, timings)
+            replace_region(&moved, &grid, &materials, &region, params, timings)
                 .and_then(|a| check_mesh(&a.mesh, &lattice, timings).map(|()| a))
         };
         let attempt = match attempt {
@@ -320,6 +360,7 @@ fn replace_region(
     grid: &Grid,
     materials: &Materials,
     region: &FlawedRegion,
+    params: &GridParams,
     timings: &mut Timings,
 ) -> Result<Attempt, Inconsistency> {
     let mut cut = timings
@@ -332,7 +373,9 @@ fn replace_region(
             reason: e.to_string(),
         })?;
     let labels = timings
-        .time("labels", || correct_labels(moved, grid, materials, region))
+        .time("labels", || {
+            correct_labels_with(moved, grid, materials, region, params.label_correction)
+        })
         .map_err(|e| Inconsistency {
             // Not local (mismatched inputs, size limits): no cells, so no retry.
             stage: "labels",
@@ -350,7 +393,7 @@ fn replace_region(
                 materials,
                 region,
                 &labels,
-                &RebuildOptions::default(),
+                &params.rebuild,
             )
         })
         .map_err(|e| Inconsistency {

@@ -141,3 +141,28 @@ pub fn check_proposal(mesh: &LabeledMesh, proposed: &[DVec3]) -> Result<(), Trac
     }
     Ok(())
 }
+
+/// Serde for `Option<Duration>` as seconds (a number, or `null`), for the backends' time
+/// budgets: records and scenario files say `time_budget = 2.5`. Use with
+/// `#[serde(with = "mesh_core::tracker::optional_seconds")]`.
+pub mod optional_seconds {
+    use std::time::Duration;
+
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    /// Writes the duration as seconds, or `null`.
+    pub fn serialize<S: Serializer>(value: &Option<Duration>, s: S) -> Result<S::Ok, S::Error> {
+        value.map(|d| d.as_secs_f64()).serialize(s)
+    }
+
+    /// Reads seconds (or `null`); a negative, non-finite or too large number is an error
+    /// naming the value.
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Duration>, D::Error> {
+        match Option::<f64>::deserialize(d)? {
+            None => Ok(None),
+            Some(x) => Duration::try_from_secs_f64(x)
+                .map(Some)
+                .map_err(|e| serde::de::Error::custom(format!("time_budget = {x}: {e}"))),
+        }
+    }
+}

@@ -5,15 +5,17 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use anyhow::Context;
+use surftrack::Backend;
 
 use crate::bench::Simulate;
 use crate::driver::{RunConfig, run_scene};
 use crate::isolate::{EXIT_RUN_FAILED, EXIT_UNAVAILABLE};
-use crate::record::{FailureReason, RunRecord};
+use crate::options::{OptionsBuilder, RunOptions, option_lines};
+use crate::record::{FailureReason, RunRecord, SceneParams};
 use crate::report::{run_plots, write_files};
 use crate::scenes::SceneOptions;
 
-use super::{RunArgs, SceneArgs, output};
+use super::{OptionArgs, RunArgs, SceneArgs, output};
 
 /// Longest a simulated hang sleeps: long past any test's watchdog, short enough that a
 /// forgotten child goes away by itself.
@@ -58,26 +60,126 @@ fn simulate(what: Simulate) {
     }
 }
 
+/// The options of a run: `base` (defaults, or a record's), then the scenario file, then
+/// every `--set`.
+pub(super) fn build_options(
+    base: &RunOptions,
+    args: &OptionArgs,
+) -> anyhow::Result<OptionsBuilder> {
+    let mut builder = OptionsBuilder::new(base);
+    if let Some(path) = &args.config {
+        builder.config_file(path)?;
+    }
+    for assignment in &args.set {
+        builder.set(assignment)?;
+    }
+    Ok(builder)
+}
+
+/// Reads a `run.json` to replay.
+fn read_replay(path: &Path) -> anyhow::Result<RunRecord> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    serde_json::from_str(&text).with_context(|| format!("{} is not a run record", path.display()))
+}
+
+/// What a run is, from the command line or from a record.
+struct Plan {
+    scene: String,
+    backend: Backend,
+    seed: u64,
+    steps: Option<usize>,
+    dt: Option<f64>,
+    scene_args: SceneArgs,
+    base: RunOptions,
+    replay: bool,
+}
+
+fn plan(args: &RunArgs) -> anyhow::Result<Plan> {
+    let Some(path) = &args.from_record else {
+        if args.scene.is_empty() {
+            anyhow::bail!("a scene is required (or --from-record run.json)");
+        }
+        let scene = args.scene.clone();
+        return Ok(Plan {
+            scene,
+            backend: args.tracker,
+            seed: args.seed,
+            steps: args.steps,
+            dt: args.dt,
+            scene_args: args.scene_args.clone(),
+            base: RunOptions::default(),
+            replay: false,
+        });
+    };
+    let record = read_replay(path)?;
+    let backend: Backend = record
+        .tracker
+        .parse()
+        .with_context(|| format!("record {}", path.display()))?;
+    let params = record.scene_params.clone().unwrap_or_default();
+    Ok(Plan {
+        scene: record.scene.clone(),
+        backend,
+        seed: record.seed,
+        steps: args.steps.or(Some(record.steps)),
+        dt: args.dt.or(Some(record.dt)),
+        scene_args: SceneArgs {
+            count: params.count,
+            resolution: params.resolution,
+            radius: params.radius,
+            mesh: params.mesh.map(PathBuf::from),
+        },
+        base: record.options.clone().unwrap_or_default(),
+        replay: true,
+    })
+}
+
 pub(super) fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
     if let Some(what) = args.simulate {
         simulate(what);
     }
+    let plan = plan(args)?;
+    let builder = build_options(&plan.base, &args.option_args)?;
+    let mut run_options = builder.build()?;
+    // The grid's per-step shifts follow the run's seed unless an option file, a --set or
+    // the replayed record fixes them.
+    if !plan.replay && !builder.was_set("grid.seed") {
+        run_options.grid.seed = plan.seed;
+    }
+    if args.print_options {
+        for line in option_lines(&run_options) {
+            println!("{line}");
+        }
+        return Ok(ExitCode::SUCCESS);
+    }
     let out = args.out.clone().unwrap_or_else(|| {
-        PathBuf::from("out").join(format!("{}-{}", args.scene, args.tracker.name()))
+        PathBuf::from("out").join(format!("{}-{}", plan.scene, plan.backend.name()))
     });
     let config = RunConfig {
-        scene: args.scene.clone(),
-        options: scene_options(&args.scene_args, args.seed)?,
-        backend: args.tracker,
-        steps: args.steps,
-        dt: args.dt,
+        scene: plan.scene.clone(),
+        options: scene_options(&plan.scene_args, plan.seed)?,
+        backend: plan.backend,
+        steps: plan.steps,
+        dt: plan.dt,
         every: args.every,
         out: Some(out.clone()),
         ascii: args.ascii,
         max_triangles: args.max_triangles,
         check_intersections: args.check_intersections,
+        run_options,
+        scene_params: SceneParams {
+            count: plan.scene_args.count,
+            resolution: plan.scene_args.resolution,
+            radius: plan.scene_args.radius,
+            mesh: plan
+                .scene_args
+                .mesh
+                .as_ref()
+                .map(|p| p.display().to_string()),
+        },
     };
-    let progress = output::progress_bar(args.quiet || args.json, 0, &args.scene);
+    let progress = output::progress_bar(args.quiet || args.json, 0, &plan.scene);
     let record = run_scene(&config, &progress)?;
     progress.finish_and_clear();
     let record_path = write_record(&out, &record)?;

@@ -60,7 +60,8 @@ use super::{Flow, FlowError, InterfaceSpeeds};
 pub const MAX_INTERFACES: usize = 8;
 
 /// How vertex velocities are derived from the triangle speeds (see the module doc).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum NormalScheme {
     /// Area-weighted vertex normals; least squares over interfaces at junctions.
     #[default]
@@ -70,7 +71,8 @@ pub enum NormalScheme {
 }
 
 /// What vertices on junctions (two or more interfaces) do.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum JunctionRule {
     /// Least squares over the interfaces (vertex normals) or triangles (face offsetting).
     #[default]

@@ -3,12 +3,14 @@
 //! Everything here is a pure function of a record, so a merged benchmark prints the very
 //! table the unsharded one would, and the tests can compare strings.
 
+pub mod ablate;
 pub mod svg;
 
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
 use crate::record::{CompareRecord, RobustnessRecord, RunRecord, RunSummary};
+pub use ablate::{ablate_markdown, ablate_plots, ablate_table};
 use svg::{Series, bar_chart, line_chart};
 
 /// A file of a report: name inside the output directory, and contents.

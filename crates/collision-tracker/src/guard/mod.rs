@@ -76,6 +76,9 @@ pub struct CollisionGuardOptions {
     /// doc, step 5). Default `None`. A tracker typically sets a fraction of its
     /// proximity threshold so that remeshing does not undo collision resolution.
     pub min_distance: Option<f64>,
+    /// Accept every edit unchecked: El Topo's `collision_safety = false`, for ablations
+    /// only (remeshing may then make the mesh intersect itself). Default false.
+    pub unchecked: bool,
 }
 
 /// What the guard did, for reports and tuning.
@@ -177,6 +180,9 @@ impl CollisionGuard {
 
 impl EditGuard for CollisionGuard {
     fn check(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), &'static str> {
+        if self.options.unchecked {
+            return Ok(());
+        }
         self.stats.checked += 1;
         if let Err(reason) = self.end_state.check(mesh, edit) {
             self.stats.vetoed_end_state += 1;

@@ -303,13 +303,23 @@ pub(crate) fn check_proximity(
         // start distance says nothing about what the mesh had before; a split that puts
         // an element within `eps` of another is the edit's doing.
         let born = verts.map(|r| matches!(r, VertexRef::New(_)));
-        let closer = |d1: f64, d0: f64, new: bool| d1 < eps && (new || d1 < d0);
         let new_tri = born.iter().any(|&b| b);
+        // Too close at the end, and not already as close at the start (computed only for
+        // the rare pair that is close at the end). Boxes grown by `eps` reject the rest
+        // before any distance is computed: nearly every gathered element is a neighbour
+        // far from the changed triangle but for the vertex it shares.
+        let closer = |d1: f64, d0: &dyn Fn() -> f64, new: bool| d1 < eps && (new || d1 < d0());
+        let near = |a: &[DVec3], b: &[DVec3]| {
+            Aabb::from_points(a)
+                .inflated(eps)
+                .overlaps(&Aabb::from_points(b))
+        };
         for &(k, p) in &s.vertices {
             if !key.contains(&k)
+                && near(&[p], &x1)
                 && closer(
                     proximity_vertex_triangle(p, x1).distance,
-                    proximity_vertex_triangle(p, x0).distance,
+                    &|| proximity_vertex_triangle(p, x0).distance,
                     new_tri,
                 )
             {
@@ -318,11 +328,13 @@ pub(crate) fn check_proximity(
         }
         for &(skey, q) in &s.near {
             for j in (0..3).filter(|&j| !skey.contains(&key[j])) {
-                if closer(
-                    proximity_vertex_triangle(x1[j], q).distance,
-                    proximity_vertex_triangle(x0[j], q).distance,
-                    born[j],
-                ) {
+                if near(&[x1[j]], &q)
+                    && closer(
+                        proximity_vertex_triangle(x1[j], q).distance,
+                        &|| proximity_vertex_triangle(x0[j], q).distance,
+                        born[j],
+                    )
+                {
                     return Err(Hit::Proximity);
                 }
             }
@@ -332,11 +344,13 @@ pub(crate) fn check_proximity(
                 if ekey.contains(&key[a]) || ekey.contains(&key[b]) {
                     continue;
                 }
-                if closer(
-                    proximity_edge_edge(x1[a], x1[b], q[0], q[1]).distance,
-                    proximity_edge_edge(x0[a], x0[b], q[0], q[1]).distance,
-                    born[a] || born[b],
-                ) {
+                if near(&[x1[a], x1[b]], &q)
+                    && closer(
+                        proximity_edge_edge(x1[a], x1[b], q[0], q[1]).distance,
+                        &|| proximity_edge_edge(x0[a], x0[b], q[0], q[1]).distance,
+                        born[a] || born[b],
+                    )
+                {
                     return Err(Hit::Proximity);
                 }
             }

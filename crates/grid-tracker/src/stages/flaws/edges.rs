@@ -80,11 +80,14 @@ pub(crate) struct DeepEdges {
 /// label found along it (the labels of its crossing triangles — with physical vectors
 /// all along, these are exactly the materials of its pieces) is the label of a physical,
 /// unflawed node within Manhattan distance `radius` cells of it; otherwise *deep*.
+/// `test == false` skips the neighbourhood search and calls every tested edge deep (the
+/// Fig. 9 ablation).
 pub(crate) fn deep_edges(
     mesh: &LabeledMesh,
     grid: &Grid,
     materials: &Materials,
     radius: i32,
+    test: bool,
     non_physical: impl Fn(IVec3) -> bool + Sync,
 ) -> DeepEdges {
     let offsets = near_offsets(radius);
@@ -97,6 +100,10 @@ pub(crate) fn deep_edges(
             };
             if edge.cells().into_iter().any(&non_physical) {
                 return (false, None);
+            }
+            if !test {
+                // Ablation (Fig. 9): without the test every complex edge is deep.
+                return (true, Some(edge));
             }
             wanted.clear();
             for x in materials.edge_crossings(n, axis) {

@@ -51,8 +51,26 @@ use crate::stages::grid::tiles::CellSet;
 use crate::stages::grid::{CellId, Grid, NodeId};
 use crate::stages::materials::Materials;
 
+/// Which part of the surface a step rebuilds on the grid: the research ablation of the
+/// 2024 paper's Fig. 17. The tracker applies it after [`detect_flaws`] (see
+/// `GridParams::resampling`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Resampling {
+    /// Only the flawed region (§6): the paper's method, which keeps every triangle outside
+    /// it exactly.
+    #[default]
+    Local,
+    /// Every allocated cell, i.e. every cell a triangle's box touches, counts as flawed,
+    /// so the whole surface is cut out and rebuilt from the grid labels every step (Fig.
+    /// 17b, "global resampling"): what a purely implicit tracker does, and what degrades
+    /// surface detail below a few cells.
+    Global,
+}
+
 /// Options of [`detect_flaws`].
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct FlawOptions {
     /// Manhattan radius, in cells, within which the deep test looks for the labels of a
     /// complex edge (§6.3). Default 2 (the paper's 2ℓ). Must lie in `0..=8`.
@@ -63,6 +81,11 @@ pub struct FlawOptions {
     /// Bound on unallocated cells the region may take from the inside of overlaps, about
     /// 1 bit each plus ~100 bytes per 8³ tile. Default 2²⁶ (~67 M cells, under 100 MB).
     pub max_unallocated_cells: usize,
+    /// The deep-cell test of §6.3 (Fig. 9). Default true. Off, every complex edge not
+    /// next to a non-physical cell counts as deep, so every complex cell is remeshed —
+    /// the "overzealous re-sampling" of small surface bumps the test exists to avoid (a
+    /// research ablation).
+    pub deep_cell_test: bool,
 }
 
 impl Default for FlawOptions {
@@ -71,6 +94,7 @@ impl Default for FlawOptions {
             deep_radius: 2,
             remesh_closed_volumes: false,
             max_unallocated_cells: 1 << 26,
+            deep_cell_test: true,
         }
     }
 }
@@ -337,10 +361,17 @@ pub fn detect_flaws(
     }
     // §6.2–6.3: cells around deep edges.
     let bad = CellFlaws::NON_PHYSICAL | CellFlaws::FLAWED_VERTEX;
-    let deep = edges::deep_edges(mesh, grid, materials, options.deep_radius, |c| {
-        grid.cell_id(c)
-            .is_some_and(|id| CellFlaws(flags[id.idx()].load(Relaxed)).intersects(bad))
-    });
+    let deep = edges::deep_edges(
+        mesh,
+        grid,
+        materials,
+        options.deep_radius,
+        options.deep_cell_test,
+        |c| {
+            grid.cell_id(c)
+                .is_some_and(|id| CellFlaws(flags[id.idx()].load(Relaxed)).intersects(bad))
+        },
+    );
     for e in &deep.deep {
         for c in e.cells() {
             mark(c, CellFlaws::DEEP);

@@ -55,6 +55,21 @@ use crate::stages::materials::{MaterialVector, Materials};
 pub use breaking::{BreakingPoint, EdgeTransitions};
 pub use nodes::{NodeIndex, region_nodes};
 
+/// How non-physical nodes get their label: the research ablation of §8.1.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LabelCorrection {
+    /// The paper's: the label of the nearest *breaking point* (the exact point along a
+    /// grid edge where the material vector stops being physical), by fast marching.
+    #[default]
+    FastMarching,
+    /// The simpler choice the paper improves on: the label of the nearest *physical grid
+    /// node* (marched over the non-physical nodes from their physical neighbours), which
+    /// ignores where between two nodes the material actually changes. Vertex placement
+    /// (§8.3) still uses the nearest breaking point where one exists.
+    NearestVertex,
+}
+
 /// Why labels could not be assigned.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum LabelError {
@@ -201,6 +216,17 @@ pub fn correct_labels(
     materials: &Materials,
     region: &FlawedRegion,
 ) -> Result<NodeLabels, LabelError> {
+    correct_labels_with(mesh, grid, materials, region, LabelCorrection::FastMarching)
+}
+
+/// [`correct_labels`] with a choice of [`LabelCorrection`] (for ablations).
+pub fn correct_labels_with(
+    mesh: &LabeledMesh,
+    grid: &Grid,
+    materials: &Materials,
+    region: &FlawedRegion,
+    method: LabelCorrection,
+) -> Result<NodeLabels, LabelError> {
     if grid.triangle_capacity() != mesh.triangle_capacity() {
         return Err(LabelError::Mismatch("the grid was built from another mesh"));
     }
@@ -315,7 +341,15 @@ pub fn correct_labels(
     }
     stats.marched_nodes = best.iter().filter(|b| b.is_some()).count();
 
-    // Fallback: components no breaking point reached take the nearest physical label.
+    // Fallback: components no breaking point reached take the nearest physical label
+    // (with `NearestVertex`, every non-physical node does; its breaking point, where
+    // marched, is kept for vertex placement).
+    let nearest_vertex = method == LabelCorrection::NearestVertex;
+    let marched = if nearest_vertex {
+        std::mem::replace(&mut best, vec![None; nodes.len()])
+    } else {
+        Vec::new()
+    };
     let unreached: Vec<bool> = open
         .iter()
         .zip(&best)
@@ -351,6 +385,11 @@ pub fn correct_labels(
                 *b = Some(f);
                 stats.fallback_nodes += 1;
             }
+        }
+    }
+    for (b, m) in best.iter_mut().zip(marched) {
+        if let (Some(b), Some(m)) = (b.as_mut(), m) {
+            b.point.position = m.point.position;
         }
     }
 

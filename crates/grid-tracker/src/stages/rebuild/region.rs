@@ -46,7 +46,8 @@ use crate::stages::labels::NodeLabels;
 use crate::stages::materials::Materials;
 
 /// Options of [`rebuild_region`].
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct RebuildOptions {
     /// Steps of non-manifold curve smoothing (§8.3). Default 10, the paper's. Zero
     /// switches it off.
