@@ -12,10 +12,12 @@ use surftrack::Backend;
 
 use crate::bench::{Shard, Simulate};
 
+mod ablate;
 mod bench;
 mod convert;
 mod fix;
 mod generate;
+mod implicit;
 mod output;
 mod run;
 mod scenes;
@@ -126,6 +128,9 @@ Examples:
   surftrack run spheres --spheres 20 --seed 1 --steps 40 --tracker grid
   surftrack run enright --resolution 16 --every 10 --tracker collision
   surftrack run copies --mesh bunny.ply --count 3
+  surftrack run rolling --set grid.resampling=global --set grid.improve_scope=changed
+  surftrack run spheres --config scenario.toml --print-options
+  surftrack run --from-record out/db/run.json --out out/db-replay
 
 Output (in --out, default out/<scene>-<tracker>): frame_0000.ply (the initial mesh),
 then every --every steps and the last step; run.json (schema surftrack.run/1:
@@ -154,12 +159,40 @@ pub struct SceneArgs {
     pub mesh: Option<PathBuf>,
 }
 
+/// Options as data, shared by `run` and the benchmarks: a scenario file and `--set`
+/// overrides of any backend or flow option (see `bench_harness::options`).
+#[derive(Debug, Args, Clone, Default)]
+pub struct OptionArgs {
+    /// Scenario file (TOML) with tables `[grid]`, `[collision]`, `[flow]` overriding
+    /// any option, e.g. `[grid]\nresampling = "global"`.
+    #[arg(long, value_name = "FILE.toml")]
+    pub config: Option<PathBuf>,
+    /// Override one option, after the scenario file; repeatable. Paths are field paths
+    /// (`grid.resampling=global`, `grid.flaws.deep_cell_test=false`,
+    /// `collision.merge=false`, `flow.normal_scheme=face_offsetting`); `--print-options`
+    /// lists them all.
+    #[arg(long = "set", value_name = "PATH=VALUE")]
+    pub set: Vec<String>,
+}
+
 /// Arguments of `surftrack run`.
 #[derive(Debug, Args)]
 #[command(after_long_help = RUN_EXAMPLES)]
 pub struct RunArgs {
-    /// The scene (`surftrack scenes` lists them).
+    /// The scene (`surftrack scenes` lists them); not needed with --from-record.
+    #[arg(required_unless_present = "from_record", default_value = "")]
     pub scene: String,
+    /// Reproduce a run from its `run.json`: same scene, scene parameters, backend, seed,
+    /// steps, time step and options (`--set`, `--config`, `--steps`, `--out` still apply).
+    /// Bit-identical output for the same thread count (`RAYON_NUM_THREADS`).
+    #[arg(long, value_name = "RUN_JSON")]
+    pub from_record: Option<PathBuf>,
+    /// Print the effective options (one `path = value` per line) and exit.
+    #[arg(long)]
+    pub print_options: bool,
+    /// Scenario file and `--set` overrides.
+    #[command(flatten)]
+    pub option_args: OptionArgs,
     /// Tracker backend: `grid` (Heiss-Synak et al. 2024) or `collision` (Los Topos).
     #[arg(long, short = 't', default_value = "grid")]
     pub tracker: Backend,
@@ -223,6 +256,12 @@ pub enum BenchCommand {
     Merge(MergeArgs),
     /// Run scenes with every backend side by side and tabulate time, triangles and events.
     Compare(CompareArgs),
+    /// Research ablations: the cross product of option variants on the same seeds, each
+    /// run isolated; a table and plots per variant.
+    Ablate(AblateArgs),
+    /// An animated implicit surface (metaballs) followed by the grid tracker vs marching
+    /// tetrahedra from scratch every frame: ms per frame, triangles, temporal coherence.
+    Implicit(implicit::ImplicitArgs),
 }
 
 const ROBUSTNESS_EXAMPLES: &str = "\
@@ -355,6 +394,87 @@ pub struct CompareArgs {
     pub quiet: bool,
 }
 
+const ABLATE_EXAMPLES: &str = "\
+Examples:
+  surftrack bench ablate rolling --preset resampling --seeds 3
+  surftrack bench ablate spheres --vary grid.flaws.deep_cell_test=true,false --seeds 5
+  surftrack bench ablate double-bubble --tracker collision --vary collision.merge=true,false \\
+      --vary collision.t1=true,false --seeds 2 --steps 30 --json
+
+Presets (each sets the backend, the varied options and fixed options; --vary adds more):
+  resampling        grid: local vs global resampling (2024 Fig. 17b), local improvement
+  deep-cells        grid: deep-cell test on/off (2024 Fig. 9)
+  curve-smoothing   grid: non-manifold curve smoothing 10 steps vs off (2024 §8.3)
+  label-correction  grid: fast marching to breaking points vs nearest grid vertex (§8.1)
+  merging           collision: snap merging vs none (Los Topos §7)
+  t1                collision: T1 vertex separation on/off (Los Topos §5)
+  impact-zones      collision: impact zones (fail-safe) on/off (El Topo §3.8) [1]
+  collision-safety  collision: El Topo's collision_safety on/off [1]
+  normal-flow       both backends: vertex-normal vs face-offsetting normal flow (Los Topos §8.3)
+  remeshing         both backends: mesh improvement on/off (El Topo Figs. 4.5-4.6)
+  [1] the option is recorded; the collision backend does not act on it yet.
+
+Output (in --out, default out/ablate-<scene>): ablate.json (schema surftrack.ablate/1),
+report.md, plots (success_rate.svg, seconds_per_step.svg, untouched_fraction.svg,
+triangles.svg, volume_drift.svg), runs/<variant>/seed-<s>/ with run.json and child.log.
+
+Untouched fraction: the fraction of the final mesh's triangles that are an initial
+triangle carried by the scene's rigid motion (rolling) or not moved at all (other
+scenes), within 1e-9 of the scene size; see bench_harness::preservation.";
+
+/// Arguments of `surftrack bench ablate`.
+#[derive(Debug, Args)]
+#[command(after_long_help = ABLATE_EXAMPLES)]
+pub struct AblateArgs {
+    /// The scene (`surftrack scenes`).
+    pub scene: String,
+    /// A named ablation (see below); its variants are crossed with any --vary.
+    #[arg(long)]
+    pub preset: Option<String>,
+    /// An option and its values, `path=v1,v2,...`; repeatable (the cross product runs).
+    #[arg(long, value_name = "PATH=V1,V2,...")]
+    pub vary: Vec<String>,
+    /// Backends (default: the preset's, else grid).
+    #[arg(long, short = 't', value_delimiter = ',')]
+    pub tracker: Vec<Backend>,
+    /// Number of seeds (first-seed, first-seed+1, ...), the same for every variant.
+    #[arg(long, default_value_t = 3)]
+    pub seeds: usize,
+    /// First seed.
+    #[arg(long, default_value_t = 1)]
+    pub first_seed: u64,
+    /// Steps per run (default: the scene's).
+    #[arg(long)]
+    pub steps: Option<usize>,
+    /// Scene parameters.
+    #[command(flatten)]
+    pub scene_args: SceneArgs,
+    /// Scenario file and fixed `--set` overrides applied to every variant.
+    #[command(flatten)]
+    pub option_args: OptionArgs,
+    /// Time limit per run, seconds.
+    #[arg(long, default_value_t = 1800.0)]
+    pub timeout: f64,
+    /// Children running at once.
+    #[arg(long, short = 'j', default_value_t = 1)]
+    pub jobs: usize,
+    /// Memory guard: triangle cap per run.
+    #[arg(long, default_value_t = 2_000_000)]
+    pub max_triangles: usize,
+    /// Memory guard: resident memory cap per child, MiB (Linux); 0 = off.
+    #[arg(long, default_value_t = 8192)]
+    pub max_memory_mib: u64,
+    /// Output directory (default: out/ablate-<scene>).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Print ablate.json on stdout instead of the table.
+    #[arg(long)]
+    pub json: bool,
+    /// No progress bar.
+    #[arg(long, short = 'q')]
+    pub quiet: bool,
+}
+
 /// Arguments of `surftrack scenes`.
 #[derive(Debug, Args)]
 pub struct ScenesArgs {
@@ -453,6 +573,8 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             BenchCommand::Robustness(args) => bench::robustness(&args),
             BenchCommand::Merge(args) => bench::merge(&args),
             BenchCommand::Compare(args) => bench::compare(&args),
+            BenchCommand::Ablate(args) => ablate::run(&args),
+            BenchCommand::Implicit(args) => implicit::run(&args),
         },
         Command::Scenes(args) => scenes::run(&args),
         Command::Fix(args) => fix::run(&args),

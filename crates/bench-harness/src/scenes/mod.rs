@@ -13,11 +13,15 @@
 //! | `inversion` | a double bubble thrown into self-intersection by strong smooth noise, fixed in one step (2024 Fig. 15) |
 //! | `copies` | k rotated copies of a mesh teleported onto each other, one step (2024 Fig. 16) |
 //! | `cyclic` | cyclical normal flow a→b→c→a around a still triple curve (Los Topos Fig. 16) |
+//! | `rolling` | two decorated spheres roll into each other, merge and roll apart: feature preservation (2024 Fig. 17) |
+//! | `metaballs` | an animated implicit surface followed by Newton projection: two skeleton segments cross, blend, split (Nesme & Bouthors 2006, Fig. 1) |
 //!
 //! Sizes default to a few thousand triangles so a run takes seconds to minutes; the
 //! options of [`SceneOptions`] scale them.
 
+pub mod metaballs;
 mod quadrant_sphere;
+pub mod rolling;
 
 use glam::DVec3;
 use mesh_core::generators::{
@@ -29,9 +33,10 @@ use rand_chacha::ChaCha8Rng;
 
 use crate::flows::{
     CurlNoiseFlow, CurlNoiseParams, EnrightFlow, Flow, FlowError, Integrator, InterfaceSpeeds,
-    MeanCurvatureFlow, NormalFlow, NormalScheme, OneShot, RigidRotation, Schedule, TargetPositions,
+    MeanCurvatureFlow, NormalFlow, OneShot, RigidRotation, Schedule, TargetPositions,
     cyclic_normal_flow,
 };
+use crate::options::FlowOptions;
 
 pub use quadrant_sphere::{MAX_RESOLUTION as QUADRANT_MAX_RESOLUTION, quadrant_sphere};
 
@@ -105,6 +110,18 @@ pub const SCENES: &[SceneInfo] = &[
         knobs: "--radius (1), --resolution = segments around the triple circle (32)",
     },
     SceneInfo {
+        name: "rolling",
+        summary: "two decorated spheres roll into each other, merge and roll apart: feature preservation (2024 paper Fig. 17)",
+        steps: 40,
+        knobs: "--resolution = icosphere subdivisions (4), --radius (0.3)",
+    },
+    SceneInfo {
+        name: "metaballs",
+        summary: "an animated implicit surface followed by Newton projection: two skeleton segments cross, blend and split (Nesme & Bouthors 2006, Fig. 1)",
+        steps: metaballs::STEPS,
+        knobs: "--resolution = edges per unit length (8), --count N = a swarm of N blobs instead (more --steps), --seed",
+    },
+    SceneInfo {
         name: "sphere",
         summary: "(generate only) an icosphere, label 1 inside, 0 outside",
         steps: 0,
@@ -170,11 +187,12 @@ fn sphere_set(spheres: &[PlacedSphere], subdivisions: u32) -> Result<LabeledMesh
     Ok(spheres_mesh(spheres, subdivisions)?)
 }
 
-/// Naive (area-weighted vertex normal) normal flow: every material but 0 grows at `speed`.
-fn expand(speed: f64) -> Result<NormalFlow, FlowError> {
+/// Normal flow (naive vertex normals unless `flow` says face offsetting): every material
+/// but 0 grows at `speed`.
+fn expand(speed: f64, flow: &FlowOptions) -> Result<NormalFlow, FlowError> {
     NormalFlow::new(
         InterfaceSpeeds::grow_into(Label::OUTSIDE, speed),
-        NormalScheme::VertexNormals,
+        flow.normal_scheme,
     )
 }
 
@@ -185,8 +203,18 @@ fn spheres_radius(n: usize) -> f64 {
     (0.3 * (n.max(1) as f64).powf(-1.0 / 3.0)).min(0.2)
 }
 
-/// Builds a tracked scene by name.
+/// Builds a tracked scene by name, with the default flow options.
 pub fn build_tracked(name: &str, o: &SceneOptions) -> Result<Scene, SceneError> {
+    build_tracked_with(name, o, &FlowOptions::default())
+}
+
+/// Builds a tracked scene by name, its flows configured by `flow` (the normal-flow
+/// scheme of the `normal-flow` ablation).
+pub fn build_tracked_with(
+    name: &str,
+    o: &SceneOptions,
+    flow_options: &FlowOptions,
+) -> Result<Scene, SceneError> {
     let info = scene_info(name).ok_or_else(|| SceneError::Unknown(name.to_string()))?;
     if info.steps == 0 {
         return Err(SceneError::NotTracked(name.to_string()));
@@ -206,8 +234,11 @@ pub fn build_tracked(name: &str, o: &SceneOptions) -> Result<Scene, SceneError> 
             let mesh = sphere_set(&spheres, resolution(3))?;
             let flow = Schedule::new(
                 vec![
-                    (0.6 * r, Box::new(expand(1.0)?) as Box<dyn Flow>),
-                    (2.0 * r, Box::new(expand(-1.0)?)),
+                    (
+                        0.6 * r,
+                        Box::new(expand(1.0, flow_options)?) as Box<dyn Flow>,
+                    ),
+                    (2.0 * r, Box::new(expand(-1.0, flow_options)?)),
                 ],
                 false,
             )?;
@@ -222,7 +253,12 @@ pub fn build_tracked(name: &str, o: &SceneOptions) -> Result<Scene, SceneError> 
                 place_random_spheres(n, DVec3::ZERO, DVec3::ONE, [0.5 * r_max, r_max], o.seed)?;
             let mesh = sphere_set(&spheres, resolution(2))?;
             let speed = 0.5 * (n.max(1) as f64).powf(-1.0 / 3.0);
-            (mesh, Box::new(expand(speed)?), 1.0 / 40.0, Some(n))
+            (
+                mesh,
+                Box::new(expand(speed, flow_options)?),
+                1.0 / 40.0,
+                Some(n),
+            )
         }
         "zalesak" => {
             let mesh = generators::zalesak(resolution(32) as usize)?;
@@ -267,7 +303,7 @@ pub fn build_tracked(name: &str, o: &SceneOptions) -> Result<Scene, SceneError> 
             })?;
             let flow = Schedule::new(
                 vec![
-                    (dt, Box::new(expand(0.5)?) as Box<dyn Flow>),
+                    (dt, Box::new(expand(0.5, flow_options)?) as Box<dyn Flow>),
                     (dt, Box::new(noise)),
                 ],
                 true,
@@ -328,6 +364,14 @@ pub fn build_tracked(name: &str, o: &SceneOptions) -> Result<Scene, SceneError> 
             let mesh = generators::double_bubble(r, resolution(32) as usize)?;
             let flow = cyclic_normal_flow(label(1), label(2), Label::OUTSIDE, 1.0)?;
             (mesh, Box::new(flow), 0.01 * r, None)
+        }
+        "rolling" => {
+            let (mesh, flow, dt) = rolling::build(o, info.steps)?;
+            (mesh, Box::new(flow), dt, None)
+        }
+        "metaballs" => {
+            let (mesh, flow, dt) = metaballs::build(o)?;
+            (mesh, Box::new(flow), dt, o.count)
         }
         other => return Err(SceneError::Unknown(other.to_string())),
     };
@@ -406,6 +450,8 @@ pub fn smoke_options(name: &str) -> SceneOptions {
         "enright" => (None, Some(4)),
         "foam" => (Some(4), None),
         "inversion" | "cyclic" => (None, Some(8)),
+        "rolling" => (None, Some(2)),
+        "metaballs" => (None, Some(5)),
         "copies" => (Some(2), Some(8)),
         _ => (None, None),
     };

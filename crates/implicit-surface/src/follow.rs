@@ -1,0 +1,735 @@
+//! Stage 2 — following the animated surface (paper §2 and §4), with a tracker backend
+//! resolving the topology.
+//!
+//! One frame, from the mesh on `F(·, t₀) = 0` to `F(·, t₁) = 0` ([`Follower::advance_to`]):
+//!
+//! ```text
+//! relax (tangential)  →  project (Newton, eq. 2)  →  hint quasi-critical points
+//!   →  tracker.advance(proposal)  (grid backend: overlaps merge, sub-ℓ necks split,
+//!                                  remeshing keeps edges in 0.5–1.5 ℓ)
+//!   →  re-project the tracker's mesh onto F(·, t₁)
+//! ```
+//!
+//! **Keeping the mesh well shaped.** The paper's FEM "skin" (§2.3–2.4: one rest
+//! triangle, quasi-static solve, split/collapse by edge length) is replaced by two
+//! things we already have: a light *tangential relaxation* before projection (each
+//! vertex moves a fraction of the way to the mean of its neighbours, within the tangent
+//! plane of `F`, so it does not fight the projection), and the shared remeshing
+//! `mesh_core::remesh::improve` that the grid tracker runs after every step (split
+//! above 1.5 ℓ, collapse below 0.5 ℓ, Delaunay flips, null-space smoothing, every edit
+//! checked). Why: `improve` is the paper's ALTERMESH and FEM together, already tested on
+//! both backends, and it keeps sampling uniform without a linear solve per frame; the
+//! relaxation only stops vertices from bunching where the surface shrinks between two
+//! improvements.
+//!
+//! **Topology.** The paper detects blending by collisions between the two meshes and
+//! splitting by quasi-critical points, then erases, welds and collapses triangles by
+//! hand, one pair at a time. Here the grid tracker (Heiss-Synak et al. 2024) does it,
+//! for any number of places at once, including three surfaces meeting in one spot:
+//! - the tracker runs with [`FollowParams::deep_radius`] = 0 (default), i.e. every
+//!   complex grid edge — one crossed by the mesh more than once — whose labels are not
+//!   those of its end nodes is rebuilt from the node labels. A gap between two sheets,
+//!   or a neck, thinner than the cell size ℓ is exactly such an edge, so two surfaces
+//!   that the field brings within ℓ merge and a neck the projection thins below ℓ is cut:
+//!   topology is resolved at the scale ℓ, the tracker's topological resolution;
+//! - overlaps (two meshes pushed into each other) are non-physical cells and merge;
+//! - quasi-critical points (§2.2) are the hint for changes faster than one frame: a
+//!   vertex whose projection fails *inside* (`F > 0`: it sits at an interior saddle
+//!   between two sheets that the field just joined) is pushed outward along its normal
+//!   by [`FollowParams::hint_push`]·ℓ, into the other sheet, and one failing *outside*
+//!   (`F < 0`: left on a neck that the field just cut) inward, across the neck; the
+//!   resulting overlap or inverted tube is a flaw the tracker rebuilds from the grid.
+//!
+//! **Limits, measured** (`examples/metaballs.rs`): topology follows the field's to
+//! within a frame or two when a vertex moves less than about ½ ℓ per frame. Faster, deep
+//! overlaps (e.g. the crossing at ℓ = 0.1 in 40 frames, 1.1 ℓ of relative motion per
+//! frame) can make the tracker label an overlap as outside and eat the merged shape with
+//! `deep_radius = 0`, while `deep_radius = 2` (the tracker's default) survives that case
+//! but misses the three-blob split at ℓ = 0.12 in 30 frames. Surfaces born away from
+//! the mesh (a new blob appearing from nothing) are never seen — as in the paper.
+//!
+//! The follower's own mesh ([`Follower::mesh`]) is the tracker's mesh re-projected onto
+//! `F(·, t₁)`: the tracker's repairs and smoothing move vertices slightly off the
+//! surface, and the next frame's proposal starts from these projected positions anyway.
+
+use std::collections::HashSet;
+use std::time::Instant;
+
+use glam::DVec3;
+use grid_tracker::{GridParams, GridTracker};
+use mesh_core::remesh::VertexAttributes;
+use mesh_core::{Label, LabeledMesh, RegionCensus, StepReport, SurfaceTracker, VertexId};
+use rayon::prelude::*;
+
+use crate::error::{ImplicitError, invalid};
+use crate::field::ImplicitField;
+use crate::polygonize::polygonize_mesh;
+use crate::project::{ProjectParams, Projection, ProjectionOutcome, project_point};
+
+/// Parameters of the follower; lengths are fractions of the target edge length ℓ.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FollowParams {
+    /// Target edge length ℓ; also the grid tracker's cell size (its topological
+    /// resolution). Required, > 0.
+    pub edge_length: f64,
+    /// Newton steps per projection. Default 8.
+    pub max_iterations: usize,
+    /// Largest Newton step, × ℓ. Default 0.5.
+    pub step_fraction: f64,
+    /// Largest distance a vertex walks in one frame, × ℓ. Default 2. A surface moving
+    /// faster is followed over several frames (the vertices report not converged).
+    pub travel_fraction: f64,
+    /// Tangential relaxation passes before projection. Default 1.
+    pub relax_passes: usize,
+    /// Fraction of the way to the neighbours' mean each pass moves. Default 0.3.
+    pub relax_weight: f64,
+    /// How far a quasi-critical vertex is pushed across the gap or neck, × ℓ (0: never).
+    /// Default 1.
+    pub hint_push: f64,
+    /// The tracker's deep-edge radius (see the module doc). Default 0.
+    pub deep_radius: i32,
+    /// Surface components enclosing less than `debris_volume · ℓ³` are removed after the
+    /// tracker step (0: never). Default 0.25. Why: when blobs separate fast, the
+    /// tracker's rebuild can leave closed slivers of a few triangles and no volume at
+    /// the cut; the field has no surface there (projection fails on them), and a
+    /// feature smaller than ℓ³ is below the resolution anyway.
+    pub debris_volume: f64,
+    /// The grid tracker's parameters; `cell_size` and `flaws.deep_radius` are
+    /// overwritten from the fields above.
+    pub tracker: GridParams,
+}
+
+impl FollowParams {
+    /// Defaults for edge length `edge_length`.
+    pub fn new(edge_length: f64) -> Self {
+        Self {
+            edge_length,
+            max_iterations: 8,
+            step_fraction: 0.5,
+            travel_fraction: 2.0,
+            relax_passes: 1,
+            relax_weight: 0.3,
+            hint_push: 1.0,
+            deep_radius: 0,
+            debris_volume: 0.25,
+            tracker: GridParams::default(),
+        }
+    }
+
+    /// Checks the fields, naming the bad one.
+    pub fn check(&self) -> Result<(), ImplicitError> {
+        const W: &str = "FollowParams";
+        if !(self.edge_length.is_finite() && self.edge_length > 0.0) {
+            return Err(invalid(
+                W,
+                "edge_length",
+                self.edge_length,
+                "finite and > 0",
+            ));
+        }
+        for (name, v, lo, hi) in [
+            ("step_fraction", self.step_fraction, 1e-6, 100.0),
+            ("travel_fraction", self.travel_fraction, 1e-6, 1e3),
+            ("relax_weight", self.relax_weight, 0.0, 1.0),
+            ("hint_push", self.hint_push, 0.0, 10.0),
+            ("debris_volume", self.debris_volume, 0.0, 1e3),
+        ] {
+            if !(v.is_finite() && (lo..=hi).contains(&v)) {
+                return Err(invalid(W, name, v, "within its documented range"));
+            }
+        }
+        if self.relax_passes > 100 {
+            return Err(invalid(W, "relax_passes", self.relax_passes, "at most 100"));
+        }
+        if !(0..=8).contains(&self.deep_radius) {
+            return Err(invalid(W, "deep_radius", self.deep_radius, "in 0..=8"));
+        }
+        self.projection().check()
+    }
+
+    /// The Newton parameters these imply.
+    pub fn projection(&self) -> ProjectParams {
+        ProjectParams {
+            max_iterations: self.max_iterations,
+            ..ProjectParams::for_edge_length(
+                self.edge_length,
+                self.step_fraction,
+                self.travel_fraction,
+            )
+        }
+    }
+
+    /// The grid tracker's parameters these imply.
+    pub fn grid_params(&self) -> GridParams {
+        let mut p = self.tracker.clone();
+        p.cell_size = Some(self.edge_length);
+        p.flaws.deep_radius = self.deep_radius;
+        p
+    }
+}
+
+/// Which way a quasi-critical point failed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum QuasiCriticalKind {
+    /// `F > 0` where the walk stopped: an interior saddle, two sheets the field joined.
+    Blend,
+    /// `F < 0`: an exterior saddle, a neck the field cut (or no surface within reach).
+    Split,
+}
+
+/// A vertex whose projection failed (paper §2.2, "quasi-critical" point).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct QuasiCritical {
+    /// The vertex (id in the mesh the proposal was made for).
+    pub vertex: VertexId,
+    /// Where its Newton walk stopped.
+    pub position: DVec3,
+    /// `F` there.
+    pub value: f64,
+    /// Why it stopped.
+    pub outcome: ProjectionOutcome,
+    /// Blend or split side.
+    pub kind: QuasiCriticalKind,
+}
+
+/// The positions to hand to a tracker, and the quasi-critical points met on the way.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Proposal {
+    /// One position per vertex slot (dead slots copied).
+    pub positions: Vec<DVec3>,
+    /// The vertices whose projection failed, with how.
+    pub quasi_critical: Vec<QuasiCritical>,
+}
+
+/// Outward unit normal of every vertex slot: area-weighted face normals, each turned to
+/// face the outside label 0 (triangles between two inside labels do not count).
+pub fn outward_vertex_normals(mesh: &LabeledMesh) -> Vec<DVec3> {
+    let face: Vec<DVec3> = (0..mesh.triangle_capacity())
+        .into_par_iter()
+        .with_min_len(1024)
+        .map(|t| {
+            let t = mesh_core::TriId::new(t as u32);
+            if !mesh.is_triangle_alive(t) {
+                return DVec3::ZERO;
+            }
+            let [a, b, c] = mesh.tri_positions(t);
+            let n = (b - a).cross(c - a);
+            let [front, back] = mesh.labels(t);
+            if front == Label::OUTSIDE {
+                n
+            } else if back == Label::OUTSIDE {
+                -n
+            } else {
+                DVec3::ZERO
+            }
+        })
+        .collect();
+    (0..mesh.vertex_capacity())
+        .into_par_iter()
+        .with_min_len(1024)
+        .map(|v| {
+            let v = VertexId::new(v as u32);
+            if !mesh.is_vertex_alive(v) {
+                return DVec3::ZERO;
+            }
+            mesh.vertex_triangles(v)
+                .map(|t| face[t.idx()])
+                .sum::<DVec3>()
+                .normalize_or_zero()
+        })
+        .collect()
+}
+
+/// One pass of tangential relaxation: each live vertex moves `weight` of the way to the
+/// mean of its neighbours (over incident triangles), with the component along `∇F`
+/// removed so the move stays in the surface's tangent plane.
+fn relax(
+    mesh: &LabeledMesh,
+    field: &(impl ImplicitField + ?Sized),
+    positions: &[DVec3],
+    t: f64,
+    weight: f64,
+) -> Vec<DVec3> {
+    (0..mesh.vertex_capacity())
+        .into_par_iter()
+        .with_min_len(256)
+        .map(|v| {
+            let vid = VertexId::new(v as u32);
+            let p = positions[v];
+            if !mesh.is_vertex_alive(vid) {
+                return p;
+            }
+            let (mut sum, mut n) = (DVec3::ZERO, 0.0);
+            for tri in mesh.vertex_triangles(vid) {
+                for w in mesh.tri(tri) {
+                    if w != vid {
+                        sum += positions[w.idx()];
+                        n += 1.0;
+                    }
+                }
+            }
+            if n == 0.0 {
+                return p;
+            }
+            let lap = sum / n - p;
+            let g = field.gradient(p, t);
+            let normal = if g.is_finite() {
+                g.normalize_or_zero()
+            } else {
+                DVec3::ZERO
+            };
+            p + (lap - normal * lap.dot(normal)) * weight
+        })
+        .collect()
+}
+
+/// The proposal for moving `mesh` onto `F(·, t) = 0`: tangential relaxation, Newton
+/// projection of every vertex (in parallel), and the push of quasi-critical vertices
+/// across their gap or neck (module doc). Pure: reads the mesh, returns positions, so a
+/// harness flow can call it for any backend.
+pub fn propose(
+    mesh: &LabeledMesh,
+    field: &(impl ImplicitField + ?Sized),
+    t: f64,
+    params: &FollowParams,
+) -> Result<Proposal, ImplicitError> {
+    params.check()?;
+    let mut positions = mesh.positions().to_vec();
+    for _ in 0..params.relax_passes {
+        if params.relax_weight > 0.0 {
+            positions = relax(mesh, field, &positions, t, params.relax_weight);
+        }
+    }
+    let pp = params.projection();
+    let projections: Vec<Option<Projection>> = (0..mesh.vertex_capacity())
+        .into_par_iter()
+        .with_min_len(256)
+        .map(|v| {
+            mesh.is_vertex_alive(VertexId::new(v as u32))
+                .then(|| project_point(field, positions[v], t, &pp))
+        })
+        .collect();
+    let normals = if params.hint_push > 0.0 {
+        outward_vertex_normals(mesh)
+    } else {
+        Vec::new()
+    };
+    let push = params.hint_push * params.edge_length;
+    let mut quasi_critical = Vec::new();
+    for (v, pr) in projections.iter().enumerate() {
+        let Some(pr) = pr else { continue };
+        let vid = VertexId::new(v as u32);
+        if !pr.position.is_finite() {
+            return Err(ImplicitError::NonFiniteField {
+                stage: "project",
+                at: positions[v].to_array(),
+                t,
+            });
+        }
+        positions[v] = pr.position;
+        if pr.is_quasi_critical() {
+            let kind = if pr.value > 0.0 {
+                QuasiCriticalKind::Blend
+            } else {
+                QuasiCriticalKind::Split
+            };
+            if push > 0.0 && pr.outcome == ProjectionOutcome::FlatGradient {
+                let n = normals[v];
+                positions[v] += match kind {
+                    QuasiCriticalKind::Blend => n * push,
+                    QuasiCriticalKind::Split => -n * push,
+                };
+            }
+            quasi_critical.push(QuasiCritical {
+                vertex: vid,
+                position: pr.position,
+                value: pr.value,
+                outcome: pr.outcome,
+                kind,
+            });
+        }
+    }
+    Ok(Proposal {
+        positions,
+        quasi_critical,
+    })
+}
+
+/// Projects every live vertex of `mesh` onto `F(·, t) = 0` in place (no relaxation, no
+/// hints). A vertex whose walk fails (it sits at a critical point of `F`, where the
+/// gradient gives no direction) is retried from its position nudged by `¼·max_travel`,
+/// then `½·max_travel`, along its outward mesh normal (outward when `F > 0`, inward
+/// when `F < 0`: towards the surface), which breaks the symmetry that stalled it; if all
+/// fail it keeps its position. Returns the number of vertices left unprojected and the
+/// largest first-order distance `|F|/‖∇F‖` left on the projected ones.
+pub fn reproject(
+    mesh: &mut LabeledMesh,
+    field: &(impl ImplicitField + ?Sized),
+    t: f64,
+    params: &ProjectParams,
+) -> (usize, f64) {
+    let alive: Vec<bool> = (0..mesh.vertex_capacity())
+        .map(|v| mesh.is_vertex_alive(VertexId::new(v as u32)))
+        .collect();
+    let attempt = |p: DVec3| -> Option<DVec3> {
+        let pr = project_point(field, p, t, params);
+        (!pr.is_quasi_critical() && pr.position.is_finite()).then_some(pr.position)
+    };
+    let mut results: Vec<Option<DVec3>> = mesh
+        .positions()
+        .par_iter()
+        .zip(alive.par_iter())
+        .with_min_len(256)
+        .map(|(&p, &live)| if live { attempt(p) } else { Some(p) })
+        .collect();
+    if results.iter().any(Option::is_none) {
+        let normals = outward_vertex_normals(mesh);
+        for (v, r) in results.iter_mut().enumerate() {
+            if r.is_some() {
+                continue;
+            }
+            let p = mesh.positions()[v];
+            let toward = if field.value(p, t) > 0.0 { 1.0 } else { -1.0 };
+            *r = [0.25, 0.5]
+                .iter()
+                .find_map(|&s| attempt(p + normals[v] * (toward * s * params.max_travel)));
+        }
+    }
+    let mut failed = 0;
+    let mut worst: f64 = 0.0;
+    for (v, r) in results.into_iter().enumerate() {
+        match r {
+            Some(q) if alive[v] => {
+                mesh.positions_mut()[v] = q;
+                let (f, g) = field.value_and_gradient(q, t);
+                worst = worst.max(f.abs() / g.length().max(f64::MIN_POSITIVE));
+            }
+            Some(_) => {}
+            None => failed += 1,
+        }
+    }
+    (failed, worst)
+}
+
+/// The triangles of the surface components (triangles joined through shared vertices)
+/// whose enclosed volume is below `min_volume`, and how many such components there are.
+fn debris(mesh: &LabeledMesh, min_volume: f64) -> (Vec<mesh_core::TriId>, usize) {
+    fn find(parent: &mut [u32], mut i: u32) -> u32 {
+        while parent[i as usize] != i {
+            parent[i as usize] = parent[parent[i as usize] as usize];
+            i = parent[i as usize];
+        }
+        i
+    }
+    let mut parent: Vec<u32> = (0..mesh.vertex_capacity() as u32).collect();
+    for t in mesh.triangles() {
+        let [a, b, c] = mesh.tri(t).map(|v| v.raw());
+        for (x, y) in [(a, b), (b, c)] {
+            let (rx, ry) = (find(&mut parent, x), find(&mut parent, y));
+            if rx != ry {
+                parent[rx as usize] = ry;
+            }
+        }
+    }
+    let mut volume = vec![0.0f64; mesh.vertex_capacity()];
+    let mut root_of = Vec::with_capacity(mesh.num_triangles());
+    for t in mesh.triangles() {
+        let r = find(&mut parent, mesh.tri(t)[0].raw());
+        let [a, b, c] = mesh.tri_positions(t);
+        let [front, back] = mesh.labels(t);
+        let sign = if front == Label::OUTSIDE {
+            1.0
+        } else if back == Label::OUTSIDE {
+            -1.0
+        } else {
+            0.0
+        };
+        volume[r as usize] += sign * mesh_core::geometry::signed_cone_volume(a, b, c);
+        root_of.push((t, r));
+    }
+    let mut doomed = Vec::new();
+    let mut roots = Vec::new();
+    for (t, r) in root_of {
+        if volume[r as usize].abs() < min_volume {
+            doomed.push(t);
+            roots.push(r);
+        }
+    }
+    roots.sort_unstable();
+    roots.dedup();
+    (doomed, roots.len())
+}
+
+/// A good starting mesh of `F(·, t0) = 0` inside `bounds`: marching tetrahedra at cells
+/// of size ℓ (the paper's initial mesh, §2), then the shared remeshing
+/// (`mesh_core::remesh::improve`, edges to 0.5–1.5 ℓ; marching tetrahedra leaves
+/// slivers) and a projection back onto the surface. Falls back to the raw
+/// polygonization if the improved mesh does not validate.
+pub fn initial_mesh(
+    field: &(impl ImplicitField + ?Sized),
+    t0: f64,
+    bounds: [DVec3; 2],
+    edge_length: f64,
+) -> Result<LabeledMesh, ImplicitError> {
+    use mesh_core::remesh::{ImproveParams, NoGuard, improve};
+    use mesh_core::validate::{ValidateOptions, validate};
+    let raw = polygonize_mesh(field, t0, bounds, edge_length)?;
+    let mut mesh = raw.clone();
+    let params = ImproveParams {
+        target_edge_length: Some(edge_length),
+        ..ImproveParams::default()
+    };
+    let mut attrs = VertexAttributes::none();
+    improve(&mut mesh, &params, &mut attrs, &mut NoGuard);
+    mesh.compact();
+    let pp = ProjectParams::for_edge_length(edge_length, 0.5, 1.0);
+    reproject(&mut mesh, field, t0, &pp);
+    if mesh.num_triangles() > 0 && validate(&mesh, &ValidateOptions::default()).is_valid() {
+        Ok(mesh)
+    } else {
+        Ok(raw)
+    }
+}
+
+/// What one frame did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameReport {
+    /// The time reached.
+    pub t: f64,
+    /// Live vertices and triangles of the output mesh.
+    pub vertices: usize,
+    /// Live triangles.
+    pub triangles: usize,
+    /// Surface components (connected pieces of the mesh).
+    pub components: usize,
+    /// Quasi-critical points of the proposal (before the tracker).
+    pub quasi_critical: Vec<QuasiCritical>,
+    /// Vertices left off the surface by the final re-projection.
+    pub unprojected: usize,
+    /// Largest `|F|/‖∇F‖` over the projected output vertices.
+    pub max_residual: f64,
+    /// Output vertices that are the same particle as in the previous frame (carried by
+    /// the tracker, not created or rebuilt by it): the temporal-coherence count.
+    pub persisted: usize,
+    /// Debris components removed after the tracker step.
+    pub debris_removed: usize,
+    /// The tracker's report.
+    pub tracker: StepReport,
+    /// Wall seconds of the whole frame (proposal, tracker step, re-projection).
+    pub seconds: f64,
+}
+
+/// A mesh following an animated implicit surface, with the grid tracker resolving its
+/// topology (module doc).
+pub struct Follower<F: ImplicitField> {
+    field: F,
+    params: FollowParams,
+    tracker: GridTracker,
+    mesh: LabeledMesh,
+    time: f64,
+    next_tag: u64,
+}
+
+/// A tag for vertex identity: a pseudo-random double in [1, 2). Blends of tags (what
+/// edits and the PIC transfer give new vertices) are, with overwhelming probability, not
+/// tags themselves, so a tag found again means the same vertex.
+fn tag(counter: u64) -> f64 {
+    let mut z = counter.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^= z >> 31;
+    f64::from_bits(0x3FF0_0000_0000_0000 | (z >> 12))
+}
+
+impl<F: ImplicitField> Follower<F> {
+    /// Meshes `F(·, t0) = 0` inside `field.bounds(t0)` (or `bounds` if given) with
+    /// [`initial_mesh`] and starts the tracker.
+    pub fn new(
+        field: F,
+        t0: f64,
+        bounds: Option<[DVec3; 2]>,
+        params: FollowParams,
+    ) -> Result<Self, ImplicitError> {
+        params.check()?;
+        let bounds = bounds.or_else(|| field.bounds(t0)).ok_or_else(|| {
+            invalid(
+                "Follower::new",
+                "bounds",
+                "None",
+                "a box (the field reports none)",
+            )
+        })?;
+        let mesh = initial_mesh(&field, t0, bounds, params.edge_length)?;
+        Self::from_mesh(field, mesh, t0, params)
+    }
+
+    /// Starts from a given valid mesh near `F(·, t0) = 0` (labels `[0, inside]`).
+    pub fn from_mesh(
+        field: F,
+        mesh: LabeledMesh,
+        t0: f64,
+        params: FollowParams,
+    ) -> Result<Self, ImplicitError> {
+        params.check()?;
+        let mut tracker = GridTracker::new(mesh, params.grid_params())
+            .map_err(|source| ImplicitError::Track { t: t0, source })?;
+        let mut attrs = VertexAttributes::zeros(tracker.mesh(), 1);
+        let mut next_tag = 0;
+        for v in tracker.mesh().vertices() {
+            attrs.get_mut(v)[0] = tag(next_tag);
+            next_tag += 1;
+        }
+        tracker.set_attributes(attrs);
+        let mesh = tracker.mesh().clone();
+        Ok(Self {
+            field,
+            params,
+            tracker,
+            mesh,
+            time: t0,
+            next_tag,
+        })
+    }
+
+    /// The mesh on `F(·, time) = 0`.
+    pub fn mesh(&self) -> &LabeledMesh {
+        &self.mesh
+    }
+
+    /// The time of [`Self::mesh`].
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// The field.
+    pub fn field(&self) -> &F {
+        &self.field
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &FollowParams {
+        &self.params
+    }
+
+    /// The tracker (its mesh is [`Self::mesh`] before the final re-projection).
+    pub fn tracker(&self) -> &GridTracker {
+        &self.tracker
+    }
+
+    /// Removes surface components enclosing less than `debris_volume · ℓ³` from the
+    /// tracker's mesh (never all of them), restarting the tracker on the cleaned mesh
+    /// with the identity tags carried over. Returns the number removed.
+    fn remove_debris(&mut self, t: f64) -> Result<usize, ImplicitError> {
+        let min_volume = self.params.debris_volume * self.params.edge_length.powi(3);
+        if min_volume <= 0.0 {
+            return Ok(0);
+        }
+        let (doomed, count) = debris(self.tracker.mesh(), min_volume);
+        if count == 0 || doomed.len() == self.tracker.mesh().num_triangles() {
+            return Ok(0);
+        }
+        let mut mesh = self.tracker.mesh().clone();
+        let mut orphans = Vec::new();
+        for &tri in &doomed {
+            orphans.extend(mesh.tri(tri));
+            mesh.remove_triangle(tri)
+                .map_err(|source| ImplicitError::Mesh {
+                    stage: "debris",
+                    source,
+                })?;
+        }
+        orphans.sort_unstable();
+        orphans.dedup();
+        for v in orphans {
+            if mesh.vertex_triangles(v).next().is_none() {
+                mesh.remove_vertex(v)
+                    .map_err(|source| ImplicitError::Mesh {
+                        stage: "debris",
+                        source,
+                    })?;
+            }
+        }
+        let map = mesh.compact();
+        let old = self.tracker.attributes();
+        let mut attrs = VertexAttributes::zeros(&mesh, 1);
+        for (o, n) in map.vertex_map.iter().enumerate() {
+            if let Some(n) = n {
+                attrs.get_mut(*n)[0] = old.get(VertexId::new(o as u32))[0];
+            }
+        }
+        // A fresh tracker restarts its step count: shift the seed so its grid shifts do
+        // not repeat the first steps'.
+        let mut gp = self.params.grid_params();
+        gp.seed = gp
+            .seed
+            .wrapping_add(self.tracker.steps().wrapping_mul(0x9E37_79B9));
+        let mut tracker =
+            GridTracker::new(mesh, gp).map_err(|source| ImplicitError::Track { t, source })?;
+        tracker.set_attributes(attrs);
+        self.tracker = tracker;
+        Ok(count)
+    }
+
+    /// One frame to time `t` (module doc). On error the follower keeps its previous mesh
+    /// and time.
+    pub fn advance_to(&mut self, t: f64) -> Result<FrameReport, ImplicitError> {
+        if !t.is_finite() {
+            return Err(invalid("Follower::advance_to", "t", t, "finite"));
+        }
+        let start = Instant::now();
+        let proposal = propose(&self.mesh, &self.field, t, &self.params)?;
+        let before: HashSet<u64> = self
+            .tracker
+            .mesh()
+            .vertices()
+            .map(|v| self.tracker.attributes().get(v)[0].to_bits())
+            .collect();
+        let step = self
+            .tracker
+            .advance(&proposal.positions)
+            .map_err(|source| ImplicitError::Track { t, source })?;
+        // Identity: keep the tags that survived, give fresh ones to new vertices.
+        let live: Vec<VertexId> = self.tracker.mesh().vertices().collect();
+        let mut persisted = 0;
+        let mut next_tag = self.next_tag;
+        let attrs = self.tracker.attributes_mut();
+        for v in live {
+            let slot = &mut attrs.get_mut(v)[0];
+            if before.contains(&slot.to_bits()) {
+                persisted += 1;
+            } else {
+                *slot = tag(next_tag);
+                next_tag += 1;
+            }
+        }
+        self.next_tag = next_tag;
+        let debris_removed = self.remove_debris(t)?;
+        let mut mesh = self.tracker.mesh().clone();
+        // The tracker may have rebuilt vertices a few ℓ from the surface (e.g. on the
+        // cap of a neck it just cut, where the field is flat): the final projection may
+        // walk twice as far and twice as long as the proposal's.
+        let pp = self.params.projection();
+        let far = ProjectParams {
+            max_iterations: 2 * pp.max_iterations,
+            max_travel: 2.0 * pp.max_travel,
+            ..pp
+        };
+        let (unprojected, max_residual) = reproject(&mut mesh, &self.field, t, &far);
+        let components = RegionCensus::of(&mesh).components;
+        self.mesh = mesh;
+        self.time = t;
+        Ok(FrameReport {
+            t,
+            vertices: self.mesh.num_vertices(),
+            triangles: self.mesh.num_triangles(),
+            components,
+            quasi_critical: proposal.quasi_critical,
+            unprojected,
+            max_residual,
+            persisted,
+            debris_removed,
+            tracker: step,
+            seconds: start.elapsed().as_secs_f64(),
+        })
+    }
+}

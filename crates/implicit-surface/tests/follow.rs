@@ -1,0 +1,148 @@
+//! Behaviour of the follower on the scenes the issue names: two crossing skeleton
+//! elements blend into one component and split into two again, three blobs meet in one
+//! place, every frame valid and on the surface.
+
+use implicit_surface::{FollowParams, Follower, ImplicitField, scenes};
+use mesh_core::validate::{ValidateOptions, validate};
+
+/// Runs an animation, checking every frame; returns the component count per frame.
+fn run(anim: &scenes::Animation, tol: f64) -> Vec<usize> {
+    let params = FollowParams::new(anim.edge_length);
+    let mut f = Follower::new(anim.field.clone(), anim.t0, None, params).unwrap();
+    let mut comps = Vec::new();
+    for k in 1..=anim.frames {
+        let t = anim.time(k, anim.frames);
+        let r = f.advance_to(t).unwrap_or_else(|e| panic!("frame {k}: {e}"));
+        let report = validate(f.mesh(), &ValidateOptions::default());
+        assert!(report.is_valid(), "frame {k} (t = {t}): {report}");
+        // Within tolerance of F = 0: first-order distance |F|/|∇F| at every vertex.
+        let mut worst: f64 = 0.0;
+        for v in f.mesh().vertices() {
+            let p = f.mesh().position(v);
+            let (val, g) = anim.field.value_and_gradient(p, t);
+            worst = worst.max(val.abs() / g.length().max(1e-12));
+        }
+        eprintln!(
+            "frame {k:3} t={t:.3} comps={} tris={} qc={} unproj={} worst={worst:.2e} persisted={}/{} ms={:.1}",
+            r.components,
+            r.triangles,
+            r.quasi_critical.len(),
+            r.unprojected,
+            r.persisted,
+            r.vertices,
+            r.seconds * 1e3
+        );
+        assert!(
+            worst < tol * anim.edge_length,
+            "frame {k}: |F|/|∇F| = {worst}"
+        );
+        comps.push(r.components);
+    }
+    comps
+}
+
+#[test]
+fn crossing_elements_blend_into_one_component_then_split_into_two() {
+    let anim = scenes::crossing(1.1, 0.12, 40).unwrap();
+    let comps = run(&anim, 0.05);
+    // Apart at the start, one while they overlap (around t = ½), two at the end.
+    assert_eq!(comps[0], 2);
+    let mid = anim.frames / 2;
+    assert_eq!(comps[mid - 1], 1, "{comps:?}");
+    assert_eq!(*comps.last().unwrap(), 2, "{comps:?}");
+}
+
+#[test]
+fn three_blobs_meeting_in_one_place_merge_into_one_and_separate_into_three() {
+    let anim = scenes::triple(1.3, 0.12, 30).unwrap();
+    let comps = run(&anim, 0.05);
+    assert_eq!(comps[0], 3, "{comps:?}");
+    assert_eq!(comps[anim.frames / 2 - 1], 1, "{comps:?}");
+    assert_eq!(*comps.last().unwrap(), 3, "{comps:?}");
+}
+
+#[test]
+fn the_geometric_mesh_of_a_followed_frame_is_crack_free() {
+    use implicit_surface::{RefineParams, refine};
+    let anim = scenes::crossing(1.1, 0.15, 20).unwrap();
+    let mut f = Follower::new(
+        anim.field.clone(),
+        anim.t0,
+        None,
+        FollowParams::new(anim.edge_length),
+    )
+    .unwrap();
+    // Into the blended state, where the neck has the most curvature.
+    for k in 1..=8 {
+        f.advance_to(anim.time(k, 20)).unwrap();
+    }
+    let t = f.time();
+    let r = refine(f.mesh(), &anim.field, t, &RefineParams::default()).unwrap();
+    assert!(r.split_edges > 0);
+    let report = validate(&r.mesh, &ValidateOptions::default());
+    assert!(report.is_valid(), "{report}");
+    // Watertight: every edge has exactly two triangles.
+    let mut edges = std::collections::HashMap::<(u32, u32), u32>::new();
+    for tri in r.mesh.triangles() {
+        let [a, b, c] = r.mesh.tri(tri).map(|v| v.raw());
+        for (x, y) in [(a, b), (b, c), (c, a)] {
+            *edges.entry((x.min(y), x.max(y))).or_default() += 1;
+        }
+    }
+    assert!(edges.values().all(|&n| n == 2));
+}
+
+#[test]
+fn a_sampled_grid_field_is_followed_too() {
+    use glam::DVec3;
+    use implicit_surface::{GridField, SphereField};
+    // A sphere moving along x, sampled at two time frames: the follower sees a
+    // trilinear, piecewise-linear-in-time field.
+    let s = SphereField {
+        centre: DVec3::ZERO,
+        velocity: DVec3::new(0.5, 0.0, 0.0),
+        radius: 0.5,
+    };
+    let bounds = [DVec3::splat(-0.7), DVec3::new(1.2, 0.7, 0.7)];
+    let g = GridField::sample(&s, bounds, 0.05, &[0.0, 1.0], -1.0).unwrap();
+    let mut f = Follower::new(g.clone(), 0.0, Some(bounds), FollowParams::new(0.1)).unwrap();
+    for k in 1..=10 {
+        let t = k as f64 * 0.1;
+        let r = f.advance_to(t).unwrap();
+        assert_eq!(r.components, 1);
+        assert!(validate(f.mesh(), &ValidateOptions::default()).is_valid());
+        for v in f.mesh().vertices() {
+            let p = f.mesh().position(v);
+            assert!(
+                g.value(p, t).abs() < 1e-6,
+                "frame {k}: F = {}",
+                g.value(p, t)
+            );
+        }
+    }
+    // The mesh moved with the sphere: its bounding box is centred near x = 0.5.
+    let (lo, hi) = f
+        .mesh()
+        .vertices()
+        .map(|v| f.mesh().position(v))
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(p), hi.max(p))
+        });
+    let c = (lo + hi) * 0.5;
+    assert!((c.x - 0.5).abs() < 0.02, "{c}");
+    assert!((hi.x - lo.x - 1.0).abs() < 0.02, "{lo} {hi}");
+}
+
+#[test]
+fn bad_parameters_are_typed_errors_not_panics() {
+    let anim = scenes::crossing(1.1, 0.12, 4).unwrap();
+    let mut p = FollowParams::new(0.0);
+    assert!(Follower::new(anim.field.clone(), 0.0, None, p.clone()).is_err());
+    p.edge_length = 0.12;
+    p.hint_push = f64::NAN;
+    assert!(Follower::new(anim.field.clone(), 0.0, None, p).is_err());
+    let mut f = Follower::new(anim.field.clone(), 0.0, None, FollowParams::new(0.12)).unwrap();
+    assert!(f.advance_to(f64::NAN).is_err());
+    // A failed frame leaves the mesh as it was.
+    assert_eq!(f.time(), 0.0);
+}
