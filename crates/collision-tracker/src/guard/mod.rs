@@ -36,8 +36,9 @@
 //!    through the flip.
 //! 5. **Minimum distance** (optional, [`CollisionGuardOptions::min_distance`] `= Some(ε)`):
 //!    no pair of non-adjacent elements involving a changed triangle (added or moved) may
-//!    end closer than `ε` unless it already started at least that close (elements with a
-//!    vertex the edit creates get no such allowance: a split vertex starts where it ends).
+//!    end closer than `ε` unless it already started at least that close. Only elements
+//!    that existed before the edit get that allowance: a split vertex starts where it
+//!    ends, and a flip's new diagonal (nothing moves) "starts" as close as it ends.
 //!    Off by default: snap merging deliberately brings elements together. Steps 1–4
 //!    cannot see the danger this covers: an edit that leaves two elements a rounding
 //!    error apart without intersecting is collision-free, but every later motion of them

@@ -277,7 +277,8 @@ pub(crate) fn check_retriangulation(
 /// static triangle, a static vertex against a changed triangle, a changed edge against a
 /// static edge) may end closer than `eps` unless it started at least as close. Changed
 /// triangles are the added ones and the kept ones that move; their start is the edit's
-/// start positions. Elements with a vertex the edit creates get no such allowance.
+/// start positions. New elements (a created vertex, an edge or triangle the edit adds) get
+/// no such allowance.
 pub(crate) fn check_proximity(
     s: &mut Scratch,
     index: &TriangleIndex,
@@ -286,24 +287,32 @@ pub(crate) fn check_proximity(
     motion: &Motion,
     eps: f64,
 ) -> Result<(), Hit> {
-    let changed = edit.add_tris.iter().map(|(v, _)| *v).chain(
+    // Each changed triangle with whether the edit creates it.
+    let changed = edit.add_tris.iter().map(|(v, _)| (*v, true)).chain(
         motion
             .moved_kept
             .iter()
-            .map(|&t| mesh.tri(t).map(VertexRef::Old)),
+            .map(|&t| (mesh.tri(t).map(VertexRef::Old), false)),
     );
-    for verts in changed {
+    for (verts, added) in changed {
         let key = verts.map(|r| motion.key(r));
         let x1 = verts.map(|r| edit.end_position(mesh, r));
         let x0 = verts.map(|r| edit.start_position(mesh, r));
         let bounds = Aabb::from_points(&x1).inflated(eps);
         gather(s, index, mesh, edit, motion, &bounds);
-        // A pair that started at least as close is the flow's, not the edit's — except
-        // for elements with a new vertex: a split vertex "starts" where it ends, so its
-        // start distance says nothing about what the mesh had before; a split that puts
-        // an element within `eps` of another is the edit's doing.
-        let born = verts.map(|r| matches!(r, VertexRef::New(_)));
-        let new_tri = born.iter().any(|&b| b);
+        // A pair that started at least as close is the flow's, not the edit's — but only
+        // for elements that existed before the edit. A new element has no meaningful
+        // start: a split vertex starts where it ends, and a flip's new diagonal (nothing
+        // moves) would "start" exactly as close as it ends, so an edit that puts a new
+        // vertex, edge or triangle within `eps` of another element is the edit's doing.
+        let born = verts.map(|r| !matches!(r, VertexRef::Old(_)));
+        let new_tri = added;
+        let new_edge = |a: usize, b: usize| match (verts[a], verts[b]) {
+            (VertexRef::Old(p), VertexRef::Old(q)) => {
+                added && mesh.edge_triangles(p, q).next().is_none()
+            }
+            _ => true,
+        };
         // Too close at the end, and not already as close at the start (computed only for
         // the rare pair that is close at the end). Boxes grown by `eps` reject the rest
         // before any distance is computed: nearly every gathered element is a neighbour
@@ -348,7 +357,7 @@ pub(crate) fn check_proximity(
                     && closer(
                         proximity_edge_edge(x1[a], x1[b], q[0], q[1]).distance,
                         &|| proximity_edge_edge(x0[a], x0[b], q[0], q[1]).distance,
-                        born[a] || born[b],
+                        new_edge(a, b),
                     )
                 {
                     return Err(Hit::Proximity);

@@ -285,6 +285,65 @@ fn minimum_distance_refuses_a_split_vertex_born_next_to_another_surface() {
     assert_eq!(strict.stats().vetoed_proximity, 1);
 }
 
+/// The same for a flip: nothing moves, so the new diagonal would "start" as close as it
+/// ends. A flip whose new diagonal passes 1e-5 from another surface's edge (which is
+/// farther from the two old triangles) is refused with the minimum distance.
+#[test]
+fn minimum_distance_refuses_a_flip_diagonal_next_to_another_surface() {
+    let big = sphere(2, DVec3::ZERO, 1.0, [0, 1]);
+    let a = top(&big);
+    let c = neighbour(&big, a);
+    let fan: Vec<TriId> = big.edge_triangles(a, c).collect();
+    assert_eq!(fan.len(), 2);
+    // Rotate each triangle to start at the edge's first end along its orientation.
+    let rotated = |t: TriId| {
+        let v = big.tri(t);
+        let k = (0..3)
+            .find(|&k| (v[k] == a || v[k] == c) && (v[(k + 1) % 3] == a || v[(k + 1) % 3] == c))
+            .expect("edge in triangle");
+        [v[k], v[(k + 1) % 3], v[(k + 2) % 3]]
+    };
+    let ([p, q, b], [_, _, d]) = (rotated(fan[0]), rotated(fan[1]));
+    let labels = big.labels(fan[0]);
+    let (xb, xd) = (big.position(b), big.position(d));
+    let m = (xb + xd) * 0.5;
+    let n = -m.normalize();
+    let e = (xd - xb).normalize();
+    let w = e.cross(n).normalize();
+    // A small tetrahedron inside the sphere, one edge 1e-5 under the new diagonal.
+    let o = m + n * 1e-5;
+    let pts = vec![
+        o - w * 0.01,
+        o + w * 0.01,
+        m + n * 0.05,
+        m + n * 0.05 + e * 0.02,
+    ];
+    let faces = [[0u32, 2, 1], [0, 1, 3], [1, 2, 3], [2, 0, 3]];
+    let flipped: Vec<[u32; 3]> = faces.iter().map(|&[i, j, k]| [i, k, j]).collect();
+    let tet = [faces.to_vec(), flipped]
+        .into_iter()
+        .filter_map(|f| LabeledMesh::from_raw(pts.clone(), &f, &[[1, 2]; 4]).ok())
+        .map(|t| union(&[big.clone(), t]))
+        .find(|m| validate(m, &ValidateOptions::with_intersections()).is_valid())
+        .expect("a valid union with the tetrahedron inside");
+    let edit = Edit {
+        remove_tris: fan.clone(),
+        // Edge p→q of the first triangle becomes b→d: [b, p, d] and [d, q, b].
+        add_tris: vec![
+            ([b, p, d].map(VertexRef::Old), labels),
+            ([d, q, b].map(VertexRef::Old), labels),
+        ],
+        ..Edit::default()
+    };
+    assert!(CollisionGuard::new().check(&tet, &edit).is_ok());
+    let mut strict = CollisionGuard::with_options(CollisionGuardOptions {
+        min_distance: Some(1e-3),
+        ..CollisionGuardOptions::default()
+    });
+    assert!(strict.check(&tet, &edit).is_err());
+    assert_eq!(strict.stats().vetoed_proximity, 1);
+}
+
 /// A coarse sphere and a small one hovering over an edge midpoint, in the gap between the
 /// coarse sphere's chord and the round surface the butterfly split restores: unguarded,
 /// improvement pushes the split vertex into the small sphere; guarded, the split falls
