@@ -293,10 +293,10 @@ fn intersecting_or_invalid_input_is_refused_by_name() {
 }
 
 /// The Enright test: a sphere of radius 0.15 at (0.35, 0.35, 0.35) through one period
-/// T = 3 of the Enright deformation field, RK4 per step. Slow (thousands of vertices at the
-/// stretched maximum), hence ignored by default: `cargo test --release -- --ignored enright`.
+/// T = 3 of the Enright deformation field, RK4 per step, every frame checked exactly.
+/// Measured: 0.64 % volume change with Ω = 0.01 ℓ³ (1.72 % with the default 0.1 ℓ³), 28 s
+/// in release.
 #[test]
-#[ignore]
 fn enright_period_keeps_volume_within_one_percent() {
     let mesh = mesh_core::generators::icosphere(
         3,
@@ -307,8 +307,12 @@ fn enright_period_keeps_volume_within_one_percent() {
     .unwrap();
     let volume = |m: &LabeledMesh| label_volumes(m)[&Label::new(1)];
     let v0 = volume(&mesh);
+    // Ω a tenth of El Topo's 0.1 ℓ³: volume is what this test measures, and each
+    // remeshing edit may change it by up to Ω (ℓ is the mean edge length, ≈ 0.024).
+    let l = mesh_core::remesh::improve::mean_edge_length(&mesh);
     let params = CollisionParams {
         validation: StepValidation::Exact,
+        max_volume_change: Some(0.01 * l * l * l),
         ..CollisionParams::default()
     };
     let mut t = tracker(mesh, params);
@@ -343,6 +347,7 @@ fn enright_period_keeps_volume_within_one_percent() {
     }
     assert_clean(t.mesh(), steps);
     let change = (volume(t.mesh()) - v0).abs() / v0;
+    eprintln!("Enright period: volume changed by {:.3} %", 100.0 * change);
     assert!(change < 0.01, "volume changed by {:.3} %", 100.0 * change);
 }
 
