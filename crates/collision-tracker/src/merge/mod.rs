@@ -393,17 +393,8 @@ fn counterpart_on_triangle(
         return split_edge(mesh, attrs, guard, verts[i], verts[j], s, splits, report);
     }
     let record = SplitRecord::triangle(mesh, t);
-    match split_triangle_at(mesh, attrs, guard, t, bary) {
-        Ok(v) => {
-            report.face_splits += 1;
-            splits.push((v, record));
-            Ok(Some(v))
-        }
-        Err(e) => {
-            count_failure(SnapError::Edit(e), report)?;
-            Ok(None)
-        }
-    }
+    let split = split_triangle_at(mesh, attrs, guard, t, bary);
+    keep_split(split, record, |r| &mut r.face_splits, splits, report)
 }
 
 /// A vertex at parameter `s` of edge `{a, b}`: an end within `d`, else a split there.
@@ -442,9 +433,23 @@ fn split_edge(
     report: &mut MergeReport,
 ) -> Result<Option<VertexId>, MergeError> {
     let record = SplitRecord::edge(mesh, a, b);
-    match split_edge_at(mesh, attrs, guard, a, b, s) {
+    let split = split_edge_at(mesh, attrs, guard, a, b, s);
+    keep_split(split, record, |r| &mut r.edge_splits, splits, report)
+}
+
+/// A split's outcome: on success it is counted and recorded in `splits` (for the undo if
+/// its snap does not happen) and its vertex returned; a refusal or veto is counted and
+/// gives `None`.
+fn keep_split(
+    split: Result<VertexId, EditError>,
+    record: SplitRecord,
+    counter: fn(&mut MergeReport) -> &mut usize,
+    splits: &mut Vec<(VertexId, SplitRecord)>,
+    report: &mut MergeReport,
+) -> Result<Option<VertexId>, MergeError> {
+    match split {
         Ok(v) => {
-            report.edge_splits += 1;
+            *counter(report) += 1;
             splits.push((v, record));
             Ok(Some(v))
         }
