@@ -4,29 +4,18 @@
 //! Sizes are the smallest that still exercise each stage (icosphere subdivision 2, two
 //! spheres, a few steps), so the whole file stays well under a minute in the test profile.
 
+mod common;
+
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
 use serde_json::Value;
 
+use common::{json, text};
+
+/// Bit-identical replays need the same thread count.
 fn surftrack(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_surftrack"))
-        .args(args)
-        .current_dir(dir)
-        .env_remove("RUST_LOG")
-        // Bit-identical replays need the same thread count.
-        .env("RAYON_NUM_THREADS", "2")
-        .output()
-        .expect("the surftrack binary runs")
-}
-
-fn json(path: &Path) -> Value {
-    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    serde_json::from_str(&text).unwrap()
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
+    common::surftrack_with_env(args, dir, &[("RAYON_NUM_THREADS", "2")])
 }
 
 #[test]

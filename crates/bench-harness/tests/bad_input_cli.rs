@@ -4,21 +4,12 @@
 //! stderr — or in the `--json` record — naming the file and the problem.
 //! The library-level catalogue is `tests/reliability_bad_input.rs` in the root package.
 
+mod common;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn surftrack(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_surftrack"))
-        .args(args)
-        .current_dir(dir)
-        .env_remove("RUST_LOG")
-        .output()
-        .expect("the surftrack binary runs")
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
+use common::{surftrack, text};
 
 /// Asserts the exit code and that stderr (or stdout, for JSON records) mentions every
 /// needle, case-insensitively.

@@ -5,29 +5,13 @@
 //! do not depend on which backends exist; the one test that runs a tracker accepts
 //! "unavailable" (exit 3) for a backend this build lacks.
 
-use std::path::Path;
-use std::process::{Command, Output};
+mod common;
+
 use std::time::{Duration, Instant};
 
 use serde_json::Value;
 
-fn surftrack(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_surftrack"))
-        .args(args)
-        .current_dir(dir)
-        .env_remove("RUST_LOG")
-        .output()
-        .expect("the surftrack binary runs")
-}
-
-fn json(path: &Path) -> Value {
-    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    serde_json::from_str(&text).unwrap()
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
+use common::{json, surftrack, text};
 
 /// Reasons of every run in a robustness record, in record order.
 fn reasons(record: &Value) -> Vec<(String, u64, String)> {

@@ -1,0 +1,36 @@
+//! Helpers shared by the integration tests that drive the built `surftrack` binary.
+// Each test crate includes this module and uses only some of it.
+#![allow(dead_code)]
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+use serde_json::Value;
+
+/// Runs `surftrack args…` in `dir` (logs off) and returns its output.
+pub fn surftrack(args: &[&str], dir: &Path) -> Output {
+    surftrack_with_env(args, dir, &[])
+}
+
+/// As [`surftrack`], with extra environment variables (e.g. a fixed thread count for
+/// bit-identical replays).
+pub fn surftrack_with_env(args: &[&str], dir: &Path, env: &[(&str, &str)]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_surftrack"))
+        .args(args)
+        .current_dir(dir)
+        .env_remove("RUST_LOG")
+        .envs(env.iter().copied())
+        .output()
+        .expect("the surftrack binary runs")
+}
+
+/// A JSON file, parsed.
+pub fn json(path: &Path) -> Value {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    serde_json::from_str(&text).unwrap()
+}
+
+/// Output bytes as text.
+pub fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
