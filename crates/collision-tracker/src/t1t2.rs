@@ -252,7 +252,12 @@ fn initiate_collapse(
     }
     match apply_edit(mesh, motion, guard, edit) {
         Ok(_) => true,
-        Err(EditError::Vetoed(_) | EditError::Malformed(_) | EditError::Mesh(_)) => false,
+        Err(
+            EditError::Vetoed(_)
+            | EditError::Malformed(_)
+            | EditError::Structure(_)
+            | EditError::Mesh(_),
+        ) => false,
     }
 }
 

@@ -16,10 +16,17 @@ use crate::stages::rebuild::RebuildOptions;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ImproveScope {
-    /// The whole mesh: a tracker under large deformation (normal flow, stretching) needs
-    /// edge lengths kept in range everywhere, not only where topology changed.
-    #[default]
+    /// The whole mesh, every sweep's first pass over every vertex: the reference the local
+    /// default is measured against.
     Whole,
+    /// The newly changed surface (§8.5: cut pieces and rebuilt triangles) plus whatever the
+    /// motion took out of range or shape (an edge outside the length range, an angle below
+    /// `ImproveParams::seed_min_angle_deg`), grown by a work list as edits touch their
+    /// neighbours (`mesh_core::remesh::ImproveRegion::Around`). A tracker under large
+    /// deformation needs edge lengths kept in range wherever the motion stretched the
+    /// mesh, but not a sweep over the surface nothing degraded.
+    #[default]
+    Local,
     /// Only the triangles this step created (cut pieces and rebuilt triangles) and the
     /// triangles improvement creates from them; every other triangle is kept exactly, as
     /// in the paper's "local mesh improvement". What [`crate::fix`] uses.
@@ -70,7 +77,7 @@ pub struct GridParams {
     /// target edge length is forced to ℓ); `None` switches improvement off.
     #[serde(with = "improve_serde")]
     pub improve: Option<ImproveParams>,
-    /// Which triangles improvement may change. Default [`ImproveScope::Whole`].
+    /// Which triangles improvement works on. Default [`ImproveScope::Local`].
     pub improve_scope: ImproveScope,
     /// Bound on safety-net restarts (§9.2) per step: each one grows the flawed region
     /// where a stage found an inconsistency and redoes cut → rebuild. Default 8.
@@ -82,9 +89,8 @@ pub struct GridParams {
     /// Validate the mesh (topology, labels, geometry: layers 1–3 of
     /// [`mesh_core::validate`]) at the end of every step, failing the step if it is not
     /// valid. Default: on in debug builds, off in release builds, where the safety net's
-    /// own check after each rebuild already covers the changed region. With improvement
-    /// on, its result is always checked (and discarded for the step's unimproved mesh if
-    /// invalid), whatever this flag says.
+    /// own check after each rebuild already covers the changed region, and every
+    /// improvement edit is checked structurally before it commits.
     pub validate_each_step: bool,
     /// Local (the paper) or global resampling (Fig. 17b ablation). Default
     /// [`Resampling::Local`].
@@ -114,7 +120,7 @@ impl Default for GridParams {
             seed: 0,
             flaws: FlawOptions::default(),
             improve: Some(ImproveParams::default()),
-            improve_scope: ImproveScope::Whole,
+            improve_scope: ImproveScope::Local,
             max_safety_rounds: 8,
             subcell: SubcellPass::Require,
             max_subcell_rounds: 6,
@@ -202,6 +208,7 @@ mod improve_serde {
         feature_curve_corner_angle_deg: f64,
         separation_fraction: f64,
         separation_max_iterations: usize,
+        seed_min_angle_deg: f64,
     }
 
     impl Default for Mirror {
@@ -239,6 +246,7 @@ mod improve_serde {
                 feature_curve_corner_angle_deg: p.features.curve_corner_angle_deg,
                 separation_fraction: p.separation.separation_fraction,
                 separation_max_iterations: p.separation.max_iterations,
+                seed_min_angle_deg: p.seed_min_angle_deg,
             }
         }
     }
@@ -276,6 +284,7 @@ mod improve_serde {
                     separation_fraction: m.separation_fraction,
                     max_iterations: m.separation_max_iterations,
                 },
+                seed_min_angle_deg: m.seed_min_angle_deg,
             }
         }
     }

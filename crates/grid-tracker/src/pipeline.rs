@@ -20,8 +20,8 @@ use std::time::{Duration, Instant};
 
 use glam::IVec3;
 use mesh_core::remesh::{
-    Applied, Edit, EditGuard, ImproveParams, ImproveReport, NoGuard, StaticIntersectionGuard,
-    VertexAttributes, improve,
+    Applied, AreaDecrease, Edit, EditGuard, ImproveParams, ImproveRegion, ImproveReport, NoGuard,
+    StaticIntersectionGuard, VertexAttributes, improve, improve_in,
 };
 use mesh_core::validate::{ValidateOptions, validate};
 use mesh_core::{LabeledMesh, StageTiming, TriId, VertexId};
@@ -543,6 +543,23 @@ impl EditGuard for LocalGuard<'_> {
         self.inner.check(mesh, edit)
     }
 
+    /// Moves outside the region are blamed first (the caller asks again without them);
+    /// a batch inside it goes to the inner guard whole.
+    fn offending_moves(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Option<Vec<usize>> {
+        let outside: Vec<usize> = (0..edit.moves.len())
+            .filter(|&i| {
+                !mesh
+                    .vertex_triangles(edit.moves[i].vertex)
+                    .all(|t| self.editable(t))
+            })
+            .collect();
+        if outside.is_empty() {
+            self.inner.offending_moves(mesh, edit)
+        } else {
+            Some(outside)
+        }
+    }
+
     fn committed(&mut self, mesh: &LabeledMesh, edit: &Edit, applied: &Applied) {
         for &t in &applied.triangles {
             if t.idx() >= self.editable.len() {
@@ -580,6 +597,20 @@ pub(crate) fn improve_mesh(
     };
     match params.improve_scope {
         ImproveScope::Whole => Some(improve(mesh, &improve_params, attrs, inner)),
+        ImproveScope::Local => {
+            let region = ImproveRegion::Around {
+                seeds: created,
+                degraded: true,
+            };
+            Some(improve_in(
+                mesh,
+                &improve_params,
+                region,
+                attrs,
+                inner,
+                &AreaDecrease,
+            ))
+        }
         ImproveScope::Changed => {
             if created.is_empty() {
                 return None;
@@ -591,7 +622,18 @@ pub(crate) fn improve_mesh(
                 }
             }
             let mut guard = LocalGuard { inner, editable };
-            Some(improve(mesh, &improve_params, attrs, &mut guard))
+            let region = ImproveRegion::Around {
+                seeds: created,
+                degraded: false,
+            };
+            Some(improve_in(
+                mesh,
+                &improve_params,
+                region,
+                attrs,
+                &mut guard,
+                &AreaDecrease,
+            ))
         }
     }
 }

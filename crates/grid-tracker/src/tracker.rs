@@ -17,8 +17,7 @@
 //! # Resource bounds
 //!
 //! For `n` live triangles and a flawed region of `r` cells, one step holds at most a few
-//! copies of the mesh (`O(n)`: the working copy, the unimproved fallback, the compacted
-//! result) plus the sparse grid, whose cell–triangle incidences are counted before it is
+//! copies of the mesh (`O(n)`: the working copy and the compacted result) plus the sparse grid, whose cell–triangle incidences are counted before it is
 //! allocated and capped at `GridOptions::max_cell_entries` (2²⁶ by default; a tiny ℓ or
 //! a huge triangle is a typed `GridError::TooManyCells` / `TooFine`, not an out-of-memory
 //! abort). Time: the grid, material and flaw stages are linear in those incidences; the
@@ -184,14 +183,10 @@ impl GridTracker {
         .map_err(stage_failed)?;
         let (mut mesh, mut attrs) = (pass.mesh, pass.attrs);
         let mut edits = 0u64;
-        let mut checked = false;
         if let Some(ip) = &self.params.improve {
-            // The pass's output is valid (its safety net checked it). Improvement moves
-            // vertices next to non-manifold edges, where a fold can reorder the triangles
-            // around an edge inconsistently; a structural check (linear time, a few ms
-            // per 10⁵ triangles) catches that, and the step then keeps the unimproved
-            // mesh rather than fail or return an invalid one.
-            let unimproved = (mesh.clone(), attrs.clone());
+            // Every improvement edit passes the structural check of `apply_edit` (labels
+            // and radial order around each edge it touches included), so the pass's valid
+            // output stays valid: no copy, no whole-mesh re-validation, no fallback.
             let report = timings.time("improve", || {
                 improve_mesh(
                     &mut mesh,
@@ -210,17 +205,8 @@ impl GridTracker {
                     + r.separations
                     + r.pinched) as u64;
             }
-            let report = timings.time("validate", || validate(&mesh, &ValidateOptions::default()));
-            if !report.is_valid() {
-                tracing::warn!(
-                    "improvement left the mesh invalid; keeping the unimproved mesh: {report}"
-                );
-                (mesh, attrs) = unimproved;
-                edits = 0;
-            }
-            checked = true;
         }
-        if self.params.validate_each_step && !checked {
+        if self.params.validate_each_step {
             let report = timings.time("validate", || validate(&mesh, &ValidateOptions::default()));
             if !report.is_valid() {
                 return Err(TrackError::StageFailed {
@@ -230,7 +216,7 @@ impl GridTracker {
             }
         }
         timings
-            .check_budget(budget, if checked { "validate" } else { "pass" })
+            .check_budget(budget, "improve")
             .map_err(stage_failed)?;
         Ok((mesh, attrs, pass.stats, edits))
     }

@@ -178,6 +178,18 @@ fn per_triangle<T: Send + Sync + Copy>(
     IdVec::from_vec(values)
 }
 
+/// The smallest interior angle of a triangle, in radians (0 for a degenerate one).
+#[inline]
+pub fn triangle_min_angle(p: &[DVec3; 3]) -> f64 {
+    (0..3)
+        .map(|k| {
+            let (u, w) = (p[(k + 1) % 3] - p[k], p[(k + 2) % 3] - p[k]);
+            // atan2(|u×w|, u·w) is accurate at every angle, unlike acos of a cosine.
+            u.cross(w).length().atan2(u.dot(w))
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
 /// Mesh quality figures, for reports and for choosing remeshing thresholds.
 ///
 /// Angles are in degrees. Edge lengths are taken per triangle edge, so an edge shared by

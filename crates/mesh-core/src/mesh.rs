@@ -402,6 +402,33 @@ impl LabeledMesh {
         Ok(())
     }
 
+    /// The ids the next `n` calls of [`Self::add_vertex`] will return: free slots, the
+    /// last freed first, then appended ones. (Edits predict the ids they will create, so
+    /// that their structural check sees exactly what the commit will build.)
+    pub(crate) fn next_vertex_ids(&self, n: usize, out: &mut Vec<VertexId>) {
+        out.clear();
+        out.extend(self.free_vertices.iter().rev().take(n).copied());
+        let appended = n - out.len();
+        out.extend((0..appended).map(|k| VertexId::new((self.positions.len() + k) as u32)));
+    }
+
+    /// The ids `n` calls of [`Self::add_triangle`] will return right after
+    /// [`Self::remove_triangle`] of each of `removed`, in order (freed slots are reused last
+    /// freed first).
+    pub(crate) fn next_triangle_ids(&self, removed: &[TriId], n: usize, out: &mut Vec<TriId>) {
+        out.clear();
+        out.extend(
+            removed
+                .iter()
+                .rev()
+                .chain(self.free_tris.iter().rev())
+                .take(n)
+                .copied(),
+        );
+        let appended = n - out.len();
+        out.extend((0..appended).map(|k| TriId::new((self.tris.len() + k) as u32)));
+    }
+
     /// Adds a triangle and links it into the corner table: its three edges are re-paired
     /// radially (O(edge degree)).
     pub fn add_triangle(
@@ -512,9 +539,16 @@ impl LabeledMesh {
             at = self.ring_next[ring_slot(c)];
             let tri = self.tris[c.tri()];
             for k in 0..3 {
+                // Two-triangle edges pair the same way whatever the geometry. The radial
+                // walk tells in two steps (the ring walk of `edge_triangles` took a
+                // vertex's degree); an unpaired corner falls back to the ring.
+                let corner = CornerId::of(c.tri(), Side::Front, k);
+                let manifold = match self.opposite(corner) {
+                    Some(o) => self.opposite(o.dual()).map(CornerId::dual) == Some(corner),
+                    None => false,
+                };
                 let (a, b) = (tri[(k + 1) % 3], tri[(k + 2) % 3]);
-                // Two-triangle edges pair the same way whatever the geometry.
-                if self.edge_triangles(a, b).nth(2).is_some() {
+                if !manifold && self.edge_triangles(a, b).nth(2).is_some() {
                     self.relink_edge(a, b);
                 }
             }

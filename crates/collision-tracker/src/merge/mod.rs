@@ -465,7 +465,8 @@ fn count_failure(e: SnapError, report: &mut MergeReport) -> Result<(), MergeErro
     match e {
         SnapError::Edit(EditError::Vetoed(_)) => report.vetoed += 1,
         SnapError::Edit(EditError::Mesh(m)) => return Err(m.into()),
-        SnapError::Edit(EditError::Malformed(_)) | SnapError::Refused(_) => report.refused += 1,
+        SnapError::Edit(EditError::Malformed(_) | EditError::Structure(_))
+        | SnapError::Refused(_) => report.refused += 1,
     }
     Ok(())
 }

@@ -47,7 +47,7 @@ pub use crossing::{
     AxisCrossing, compare_crossing_with_point, cross_axis_line_triangle,
     cross_axis_segment_triangle, orient2d_sos,
 };
-pub use orient::{Axis, Sign, orient2d, orient2d_axis, orient3d};
+pub use orient::{Axis, Sign, collinear, orient2d, orient2d_axis, orient3d};
 pub use tri_tri::{
     intersect_segment_triangle, intersect_sharing_edge, intersect_sharing_vertex,
     intersect_triangle_triangle,

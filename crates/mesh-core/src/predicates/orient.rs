@@ -324,3 +324,13 @@ mod tests {
         }
     }
 }
+
+/// Exactly collinear points: the normal `(b − a) × (c − a)` is exactly zero, i.e.
+/// [`orient2d_axis`] is zero along all three axes. A triangle on such points has zero
+/// area (validation's layer 3, and the structural check of every remeshing edit).
+#[inline]
+pub fn collinear(a: DVec3, b: DVec3, c: DVec3) -> bool {
+    Axis::ALL
+        .iter()
+        .all(|&axis| orient2d_axis(axis, a, b, c) == Sign::Zero)
+}

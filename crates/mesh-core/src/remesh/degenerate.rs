@@ -62,11 +62,41 @@ pub fn remove_degenerate(
     attrs: &mut VertexAttributes,
     guard: &mut dyn EditGuard,
 ) -> DegenerateReport {
+    remove_degenerate_in(mesh, attrs, guard, None)
+}
+
+/// The live triangles to examine: every one, or those at the `only` vertices (increasing,
+/// each once). Coincident triangles share their vertices, so a duplicate of a triangle at
+/// `only` is there too.
+fn triangles_at(mesh: &LabeledMesh, only: Option<&[VertexId]>) -> Vec<TriId> {
+    match only {
+        None => mesh.triangles().collect(),
+        Some(vertices) => {
+            let mut tris: Vec<TriId> = vertices
+                .iter()
+                .filter(|&&v| mesh.is_vertex_alive(v))
+                .flat_map(|&v| mesh.vertex_triangles(v))
+                .collect();
+            tris.par_sort_unstable();
+            tris.dedup();
+            tris
+        }
+    }
+}
+
+/// [`remove_degenerate`] restricted to the triangles at the `only` vertices (`None`: the
+/// whole mesh), the work list of [`super::improve_in`].
+pub fn remove_degenerate_in(
+    mesh: &mut LabeledMesh,
+    attrs: &mut VertexAttributes,
+    guard: &mut dyn EditGuard,
+    only: Option<&[VertexId]>,
+) -> DegenerateReport {
     let mut report = DegenerateReport::default();
     let mut edit = Edit::default();
 
-    let collapsed: Vec<TriId> = mesh
-        .triangles()
+    let collapsed: Vec<TriId> = triangles_at(mesh, only)
+        .into_iter()
         .filter(|&t| is_collapsed(mesh.tri(t)))
         .collect();
     for t in collapsed {
@@ -81,10 +111,10 @@ pub fn remove_degenerate(
     let mut keyed: Vec<([VertexId; 3], TriId)> = Vec::new();
     for _ in 0..MAX_PASSES {
         keyed.clear();
-        keyed.par_extend(mesh.tris().par_iter().enumerate().filter_map(|(t, tri)| {
-            let t = TriId::new(t as u32);
+        let tris = triangles_at(mesh, only);
+        keyed.par_extend(tris.par_iter().filter_map(|&t| {
             (mesh.is_triangle_alive(t) && may_have_duplicate(mesh, t)).then(|| {
-                let mut key = *tri;
+                let mut key = mesh.tri(t);
                 key.sort_unstable();
                 (key, t)
             })

@@ -15,6 +15,7 @@ use crate::mesh::LabeledMesh;
 
 use super::attributes::{Blend, VertexAttributes};
 use super::guard::EditGuard;
+use super::structure::{StructureFault, StructureScratch, check_structure};
 
 /// A vertex an edit's new triangles refer to: an existing one or one the edit adds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -82,6 +83,10 @@ pub enum EditError {
     /// The edit refers to something that does not exist or is malformed.
     #[error("malformed edit: {0}")]
     Malformed(String),
+    /// The end state would break an invariant of the mesh around the edit (a boundary, a
+    /// degenerate, duplicate or zero-area triangle, inconsistently labelled wedges).
+    #[error("edit refused: {0}")]
+    Structure(StructureFault),
     /// The mesh refused a step (capacity).
     #[error(transparent)]
     Mesh(#[from] MeshError),
@@ -176,12 +181,55 @@ impl Edit {
 /// unchanged.
 pub fn apply_edit(
     mesh: &mut LabeledMesh,
-    attributes: &mut VertexAttributes,
+    attrs: &mut VertexAttributes,
+    guard: &mut dyn EditGuard,
+    edit: &Edit,
+) -> Result<Applied, EditError> {
+    edit.check(mesh)?;
+    STRUCTURE
+        .with_borrow_mut(|s| check_structure(mesh, edit, s))
+        .map_err(EditError::Structure)?;
+    guard.check(mesh, edit).map_err(EditError::Vetoed)?;
+    commit_guarded(mesh, attrs, guard, edit)
+}
+
+/// [`apply_edit`] without the structural check, for snap merging alone: it brings two
+/// surfaces into contact on purpose and leaves coincident triangles and the wedges between
+/// them for degenerate removal, so its intermediate states are not locally valid; the
+/// backend validates after the stage.
+pub(crate) fn apply_snap_edit(
+    mesh: &mut LabeledMesh,
+    attrs: &mut VertexAttributes,
     guard: &mut dyn EditGuard,
     edit: &Edit,
 ) -> Result<Applied, EditError> {
     edit.check(mesh)?;
     guard.check(mesh, edit).map_err(EditError::Vetoed)?;
+    commit_guarded(mesh, attrs, guard, edit)
+}
+
+/// [`check_structure`] for a batch of moves cleared by the guard; the caller blames moves
+/// with [`super::structure::blame_moves`].
+pub(crate) fn check_batch_structure(mesh: &LabeledMesh, edit: &Edit) -> Result<(), StructureFault> {
+    STRUCTURE.with_borrow_mut(|s| check_structure(mesh, edit, s))
+}
+
+thread_local! {
+    /// Buffers of the structural check, one set per thread: `apply_edit` is called for every
+    /// edit of every stage, and must not allocate for each.
+    static STRUCTURE: std::cell::RefCell<StructureScratch> =
+        std::cell::RefCell::new(StructureScratch::default());
+}
+
+/// Commits a well-formed edit ([`Edit::check`]) that the guard has already passed (a
+/// batch cleared by [`EditGuard::offending_moves`]): the capacity checks of [`apply_edit`]
+/// still run, the guard is only told.
+pub(crate) fn commit_guarded(
+    mesh: &mut LabeledMesh,
+    attrs: &mut VertexAttributes,
+    guard: &mut dyn EditGuard,
+    edit: &Edit,
+) -> Result<Applied, EditError> {
     // Capacity is the one thing the mesh could still refuse midway: check it up front
     // (free slots are reused first, so the appended count is at most the added count).
     let vertices_needed = mesh.vertex_capacity() + edit.new_vertices.len();
@@ -228,7 +276,7 @@ pub fn apply_edit(
     for m in &edit.moves {
         mesh.relink_around(m.vertex);
     }
-    attributes.apply(mesh, edit, &applied);
+    attrs.apply(mesh, edit, &applied);
     guard.committed(mesh, edit, &applied);
     Ok(applied)
 }

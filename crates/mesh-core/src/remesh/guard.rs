@@ -30,6 +30,77 @@ pub trait EditGuard {
 
     /// Told after `edit` was committed (`mesh` is the mesh after it).
     fn committed(&mut self, _mesh: &LabeledMesh, _edit: &Edit, _applied: &Applied) {}
+
+    /// Decides on a *batch*: an edit that only moves vertices, no two of which share a
+    /// triangle (batched smoothing). `None`: the whole batch may be committed, exactly as
+    /// if [`EditGuard::check`] had passed it. `Some(blamed)`: the indices into
+    /// `edit.moves` (increasing, at least one) to leave out; the caller asks again about
+    /// the rest before committing anything, and retries the blamed moves one at a time.
+    ///
+    /// Why: one check per batch instead of one per move is what makes guarded smoothing
+    /// cheap, and blaming only the offenders keeps one blocked vertex from freezing the
+    /// pass. The default bisects with `check` (El Topo's batch pseudo-motion for a CCD
+    /// guard); guards that can see every offender in one pass override it.
+    fn offending_moves(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Option<Vec<usize>> {
+        if self.check(mesh, edit).is_ok() {
+            return None;
+        }
+        let mut blamed = Vec::new();
+        bisect_moves(self, mesh, edit, 0, edit.moves.len(), &mut blamed);
+        Some(blamed)
+    }
+}
+
+/// Blames moves of the failing range `lo..hi` of `edit.moves` by asking `guard.check`
+/// about halves: a failing single move, or recursively the failing halves; when both
+/// halves pass alone (only their combination fails), the upper half, so that the caller
+/// always makes progress. The default of [`EditGuard::offending_moves`], for guards that
+/// override it only in part.
+pub fn bisect_moves<G: EditGuard + ?Sized>(
+    guard: &mut G,
+    mesh: &LabeledMesh,
+    edit: &Edit,
+    lo: usize,
+    hi: usize,
+    blamed: &mut Vec<usize>,
+) {
+    if hi - lo <= 1 {
+        blamed.extend(lo..hi);
+        return;
+    }
+    let mid = lo + (hi - lo) / 2;
+    let mut failed = false;
+    for (a, b) in [(lo, mid), (mid, hi)] {
+        let part = Edit {
+            moves: edit.moves[a..b].to_vec(),
+            ..Edit::default()
+        };
+        if guard.check(mesh, &part).is_err() {
+            failed = true;
+            bisect_moves(guard, mesh, edit, a, b, blamed);
+        }
+    }
+    if !failed {
+        blamed.extend(mid..hi);
+    }
+}
+
+/// True when `edit` is a batch in the sense of [`EditGuard::offending_moves`]: moves only,
+/// no triangle with two moved vertices.
+pub(crate) fn is_batch(mesh: &LabeledMesh, edit: &Edit, claimed: &mut Vec<bool>) -> bool {
+    if !edit.remove_tris.is_empty() || !edit.add_tris.is_empty() || !edit.new_vertices.is_empty() {
+        return false;
+    }
+    claimed.clear();
+    claimed.resize(mesh.triangle_capacity(), false);
+    for m in &edit.moves {
+        for t in mesh.vertex_triangles(m.vertex) {
+            if std::mem::replace(&mut claimed[t.idx()], true) {
+                return false;
+            }
+        }
+    }
+    true
 }
 
 /// Allows everything.
@@ -98,6 +169,8 @@ pub struct StaticIntersectionGuard {
     moved: Vec<TriId>,
     changed: Vec<Keyed>,
     candidates: Vec<TriId>,
+    /// Per triangle slot: moved by the batch being checked ([`is_batch`]).
+    claimed: Vec<bool>,
 }
 
 /// Slack of the indexed boxes, as a fraction of the mean triangle extent: large enough
@@ -464,6 +537,112 @@ impl EditGuard for StaticIntersectionGuard {
             }
         }
         Ok(())
+    }
+
+    /// One pass over the whole batch, in parallel: every moved triangle's end state
+    /// against the unmoved triangles near it (one index query each), and the moved
+    /// triangles against each other (sweep and prune on x); every move with an
+    /// intersecting triangle is blamed.
+    fn offending_moves(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Option<Vec<usize>> {
+        let mut claimed = std::mem::take(&mut self.claimed);
+        let batch = is_batch(mesh, edit, &mut claimed);
+        if !batch {
+            self.claimed = claimed;
+            return match self.check(mesh, edit) {
+                Ok(()) => None,
+                Err(_) => {
+                    let mut blamed = Vec::new();
+                    bisect_moves(self, mesh, edit, 0, edit.moves.len(), &mut blamed);
+                    Some(blamed)
+                }
+            };
+        }
+        self.refresh(mesh);
+        // The moved triangles at their end positions (only their own move changes them),
+        // grouped by move: `spans[i]..spans[i + 1]`.
+        let mut changed: Vec<(usize, Keyed)> = Vec::new();
+        let mut spans = Vec::with_capacity(edit.moves.len() + 1);
+        for (i, m) in edit.moves.iter().enumerate() {
+            spans.push(changed.len());
+            changed.extend(mesh.vertex_triangles(m.vertex).map(|t| {
+                let tri = mesh.tri(t);
+                let points = tri.map(|v| {
+                    if v == m.vertex {
+                        m.end
+                    } else {
+                        mesh.position(v)
+                    }
+                });
+                (i, Keyed::new(tri.map(|v| v.raw()), points))
+            }));
+        }
+        spans.push(changed.len());
+        // The moved triangles' end boxes on a grid of their own (cell: their mean size),
+        // for the moved-against-moved tests; the index holds only current boxes.
+        let cell = changed
+            .iter()
+            .map(|(_, a)| (a.bounds.max - a.bounds.min).max_element())
+            .sum::<f64>()
+            / changed.len().max(1) as f64;
+        let mut ends = DirtyGrid::default();
+        ends.reset(cell);
+        for (k, (_, a)) in changed.iter().enumerate() {
+            ends.insert(TriId::new(k as u32), &a.bounds);
+        }
+        let index = self.index.as_ref();
+        let dirty = &self.dirty;
+        let moved: &[bool] = &claimed;
+        let ends = &ends;
+        let changed = &changed;
+        // Per move: one index query with the box around its triangles, one grid query.
+        let blamed: Vec<[usize; 2]> = (0..edit.moves.len())
+            .into_par_iter()
+            .with_min_len(16)
+            .filter_map(|i| {
+                let mine = &changed[spans[i]..spans[i + 1]];
+                let all = mine.iter().fold(Aabb::EMPTY, |u, (_, a)| u.union(a.bounds));
+                let hits = |c: &Keyed| {
+                    c.bounds.overlaps(&all)
+                        && mine
+                            .iter()
+                            .any(|(_, a)| a.bounds.overlaps(&c.bounds) && intersect_keyed(a, c))
+                };
+                let mut hit = None;
+                let mut unmoved = |t: TriId| {
+                    if hit.is_some()
+                        || moved.get(t.idx()).copied().unwrap_or(true)
+                        || !mesh.is_triangle_alive(t)
+                    {
+                        return;
+                    }
+                    let tri = mesh.tri(t);
+                    let c = Keyed::new(tri.map(|v| v.raw()), tri.map(|v| mesh.position(v)));
+                    if hits(&c) {
+                        hit = Some([i, i]);
+                    }
+                };
+                if let Some(index) = index {
+                    index.query(&all, 0.0, |id| unmoved(TriId::new(id)));
+                }
+                dirty.query(&all, &mut unmoved);
+                if hit.is_none() {
+                    // Another move's triangles at their end positions, each pair tested
+                    // from its lower move.
+                    ends.query(&all, |k| {
+                        let (j, c) = changed[k.idx()];
+                        if hit.is_none() && j > i && hits(&c) {
+                            hit = Some([i, j]);
+                        }
+                    });
+                }
+                hit
+            })
+            .collect();
+        let mut blamed: Vec<usize> = blamed.into_iter().flatten().collect();
+        self.claimed = claimed;
+        blamed.sort_unstable();
+        blamed.dedup();
+        (!blamed.is_empty()).then_some(blamed)
     }
 
     fn committed(&mut self, mesh: &LabeledMesh, edit: &Edit, applied: &Applied) {

@@ -35,15 +35,15 @@ use crate::mesh::LabeledMesh;
 
 use super::attributes::VertexAttributes;
 use super::collapse::{CollapseError, CollapseParams, CollapseScratch, collapse_edge_in};
-use super::degenerate::{DegenerateReport, remove_degenerate};
+use super::degenerate::{DegenerateReport, remove_degenerate_in};
 use super::edit::{Applied, Edit, EditError};
 use super::features::{self, FeatureParams};
 use super::flip::{self, FlipCriterion, FlipError, FlipParams, flip_edge_in};
 use super::guard::EditGuard;
-use super::pinch::pinch_singular_vertices;
+use super::pinch::pinch_singular_vertices_in;
 use super::separate::{
     AreaDecrease, SeparationParams, SeparationReport, SeparationStrength,
-    separate_irregular_vertices,
+    separate_irregular_vertices_in,
 };
 use super::smooth::{SmoothParams, commit_moves, propose_moves};
 use super::split::{SplitPlacement, SplitScratch, split_edge_in};
@@ -98,6 +98,11 @@ pub struct ImproveParams {
     pub features: FeatureParams,
     /// Vertex separation options. Default [`SeparationParams::default`].
     pub separation: SeparationParams,
+    /// With [`ImproveRegion::Around`] and `degraded`, a triangle with an interior angle
+    /// below this (degrees) is *out of shape* and seeds the work list, as does one with an
+    /// edge outside the length range. Default 20°: twice the 10° quality bar, so a
+    /// triangle is taken up while it is still easy to mend.
+    pub seed_min_angle_deg: f64,
 }
 
 impl Default for ImproveParams {
@@ -124,8 +129,31 @@ impl Default for ImproveParams {
             min_normal_cos: 0.5,
             features: FeatureParams::default(),
             separation: SeparationParams::default(),
+            seed_min_angle_deg: 20.0,
         }
     }
+}
+
+/// Where [`improve_in`] works.
+///
+/// Why a work list: in a tracking step most of the surface is as good as after the last
+/// step; sweeping all of it again (every edge measured, every vertex smoothed and examined
+/// for T1 and pinching) made improvement most of every step. With `Around`, each stage
+/// looks only at the work list — the seeds, whatever the motion degraded, and everything
+/// an edit touched — so a step where 1 % of the mesh needs work costs about 1 % of a sweep.
+#[derive(Clone, Copy, Debug)]
+pub enum ImproveRegion<'a> {
+    /// Every vertex in the first sweep; later sweeps where the previous one edited.
+    Whole,
+    /// Start from the vertices of `seeds` and, when `degraded`, of every triangle that is
+    /// out of range or shape (an edge outside `[min, max] × target`, an angle below
+    /// [`ImproveParams::seed_min_angle_deg`]), found by one parallel scan.
+    Around {
+        /// Triangles that need work (e.g. the ones a topology change created).
+        seeds: &'a [TriId],
+        /// Also seed with the degraded triangles of the whole mesh.
+        degraded: bool,
+    },
 }
 
 /// Outcome counts of one operation.
@@ -187,7 +215,14 @@ pub fn improve(
     attrs: &mut VertexAttributes,
     guard: &mut dyn EditGuard,
 ) -> ImproveReport {
-    improve_with(mesh, params, attrs, guard, &AreaDecrease)
+    improve_in(
+        mesh,
+        params,
+        ImproveRegion::Whole,
+        attrs,
+        guard,
+        &AreaDecrease,
+    )
 }
 
 /// [`improve`] with a caller-chosen T1 separation strength (e.g. a velocity field's
@@ -199,51 +234,83 @@ pub fn improve_with(
     guard: &mut dyn EditGuard,
     strength: &dyn SeparationStrength,
 ) -> ImproveReport {
+    improve_in(mesh, params, ImproveRegion::Whole, attrs, guard, strength)
+}
+
+/// [`improve_with`] over a region: the whole mesh, or a work list grown from seeds (see
+/// [`ImproveRegion`]). Every stage of a sweep looks at the current work list only, and
+/// the vertices each edit touches join it; the next sweep works on the neighbourhood of
+/// what this one changed, and the loop stops when a sweep makes no topological edit.
+pub fn improve_in(
+    mesh: &mut LabeledMesh,
+    params: &ImproveParams,
+    region: ImproveRegion<'_>,
+    attrs: &mut VertexAttributes,
+    guard: &mut dyn EditGuard,
+    strength: &dyn SeparationStrength,
+) -> ImproveReport {
     let mut run = Run::new(mesh, params);
-    // Every edit goes through the recorder, which notes where the mesh changed so that
-    // later sweeps smooth only there.
+    // Every edit goes through the recorder, which notes where the mesh changed: the work
+    // list of the rest of the sweep, of the next smoothing pass and of the next sweep.
     let mut recorder = Recorder::new(guard);
+    // The current sweep's vertices, increasing, each once; `None`: the whole mesh.
+    let mut work: Option<Vec<VertexId>> = match region {
+        ImproveRegion::Whole => None,
+        ImproveRegion::Around { seeds, degraded } => Some(run.initial_work(mesh, seeds, degraded)),
+    };
     for _ in 0..params.max_sweeps {
+        if work.as_ref().is_some_and(Vec::is_empty) {
+            run.report.converged = true;
+            break;
+        }
         run.report.sweeps += 1;
         let mut changed = 0;
         if params.split {
-            changed += run.split_long_edges(mesh, attrs, &mut recorder);
+            changed += run.split_long_edges(mesh, attrs, &mut recorder, work.as_deref());
+            recorder.extend_work(mesh, &mut work);
         }
         if params.collapse {
-            changed += run.collapse_short_edges(mesh, attrs, &mut recorder);
+            changed += run.collapse_short_edges(mesh, attrs, &mut recorder, work.as_deref());
+            recorder.extend_work(mesh, &mut work);
         }
         if params.flip {
-            changed += run.flip_edges(mesh, attrs, &mut recorder);
+            changed += run.flip_edges(mesh, attrs, &mut recorder, work.as_deref());
+            recorder.extend_work(mesh, &mut work);
         }
         if params.smooth {
-            run.smooth(mesh, attrs, &mut recorder);
+            run.smooth(mesh, attrs, &mut recorder, work.as_deref());
         }
         if params.remove_degenerate {
-            let d = remove_degenerate(mesh, attrs, &mut recorder);
+            let d = remove_degenerate_in(mesh, attrs, &mut recorder, work.as_deref());
             let edits = d.collapsed_removed + d.pairs_relabelled + d.pairs_removed;
             run.touched(edits + d.vertices_removed);
             changed += edits;
             add_degenerate(&mut run.report.degenerate, &d);
+            recorder.extend_work(mesh, &mut work);
         }
         if params.separate {
-            let s: SeparationReport = separate_irregular_vertices(
+            let s: SeparationReport = separate_irregular_vertices_in(
                 mesh,
                 attrs,
                 &mut recorder,
                 &params.separation,
                 strength,
+                work.as_deref(),
             );
             run.touched(s.separations);
             changed += s.separations;
             run.report.separations += s.separations;
             run.report.separations_vetoed += s.vetoed;
+            recorder.extend_work(mesh, &mut work);
         }
         if params.pinch {
-            let p = pinch_singular_vertices(mesh, attrs, &mut recorder);
+            let p = pinch_singular_vertices_in(mesh, attrs, &mut recorder, work.as_deref());
             run.touched(p);
             changed += p;
             run.report.pinched += p;
         }
+        // The next sweep settles what this one changed, and only that.
+        work = Some(recorder.take_sweep(mesh));
         if changed == 0 {
             run.report.converged = true;
             break;
@@ -278,20 +345,24 @@ fn add_degenerate(sum: &mut DegenerateReport, d: &DegenerateReport) {
 
 /// Forwards every edit to the caller's guard and, while `recording`, notes the vertices of
 /// the triangles each committed edit creates and the vertices it moves: where the mesh
-/// changed since the last smoothing pass.
+/// changed. The notes feed three work lists: the rest of the current sweep
+/// ([`Recorder::extend_work`]), the next smoothing pass ([`Recorder::take_smoothing`]) and
+/// the next sweep ([`Recorder::take_sweep`]).
 ///
-/// Why: the first sweep smooths every vertex; after it, the rest of the mesh has had its
-/// pass and only the neighbourhoods of later splits, collapses, flips, separations and
-/// pinches need smoothing again. Re-smoothing the whole mesh in every sweep made the
-/// smoothing moves (each its own guarded edit) most of the cost of `improve`, while the
-/// few topological edits of late sweeps kept the loop from converging.
+/// Why smoothing follows the edits: the first sweep smooths its whole work list; after it
+/// only the neighbourhoods of later splits, collapses, flips, separations and pinches need
+/// smoothing again. Re-smoothing everything in every sweep made the smoothing moves most of
+/// the cost of `improve`, while the few topological edits of late sweeps kept the loop
+/// from converging.
 struct Recorder<'g> {
     inner: &'g mut dyn EditGuard,
     recording: bool,
-    /// Per vertex slot: noted since the last smoothing pass.
-    marked: Vec<bool>,
-    /// The noted vertices, each once.
-    touched: Vec<VertexId>,
+    /// Vertices noted this sweep, in order (repeats allowed).
+    log: Vec<VertexId>,
+    /// `log[..smoothed]` has been handed to a smoothing pass.
+    smoothed: usize,
+    /// `log[..in_work]` has joined the current sweep's work list.
+    in_work: usize,
 }
 
 impl<'g> Recorder<'g> {
@@ -299,40 +370,55 @@ impl<'g> Recorder<'g> {
         Recorder {
             inner,
             recording: true,
-            marked: Vec::new(),
-            touched: Vec::new(),
+            log: Vec::new(),
+            smoothed: 0,
+            in_work: 0,
         }
     }
 
-    fn note(&mut self, v: VertexId) {
-        if v.idx() >= self.marked.len() {
-            self.marked.resize(v.idx() + 1, false);
+    /// Adds the vertices noted since the last call to the sweep's work list (the whole
+    /// mesh needs no additions).
+    fn extend_work(&mut self, mesh: &LabeledMesh, work: &mut Option<Vec<VertexId>>) {
+        if let Some(w) = work
+            && self.in_work < self.log.len()
+        {
+            w.extend_from_slice(&self.log[self.in_work..]);
+            w.par_sort_unstable();
+            w.dedup();
+            w.retain(|&v| mesh.is_vertex_alive(v));
         }
-        if !self.marked[v.idx()] {
-            self.marked[v.idx()] = true;
-            self.touched.push(v);
-        }
+        self.in_work = self.log.len();
     }
 
-    /// The live noted vertices and their neighbours, in increasing order, each once; the
-    /// notes are cleared.
-    fn take_neighbourhood(&mut self, mesh: &LabeledMesh) -> Vec<VertexId> {
-        let mut out = Vec::with_capacity(self.touched.len() * 7);
-        for &v in &self.touched {
-            self.marked[v.idx()] = false;
-            if !mesh.is_vertex_alive(v) {
-                continue;
-            }
-            for t in mesh.vertex_triangles(v) {
-                out.extend(mesh.tri(t));
-            }
-        }
-        self.touched.clear();
-        out.par_sort_unstable();
-        out.dedup();
-        out.retain(|&v| mesh.is_vertex_alive(v));
+    /// The neighbourhood of the vertices noted since the last smoothing pass.
+    fn take_smoothing(&mut self, mesh: &LabeledMesh) -> Vec<VertexId> {
+        let out = neighbourhood(mesh, &self.log[self.smoothed..]);
+        self.smoothed = self.log.len();
         out
     }
+
+    /// The neighbourhood of everything noted this sweep; the notes are cleared.
+    fn take_sweep(&mut self, mesh: &LabeledMesh) -> Vec<VertexId> {
+        let out = neighbourhood(mesh, &self.log);
+        self.log.clear();
+        self.smoothed = 0;
+        self.in_work = 0;
+        out
+    }
+}
+
+/// The live vertices among `vertices` and their neighbours, in increasing order, each once.
+fn neighbourhood(mesh: &LabeledMesh, vertices: &[VertexId]) -> Vec<VertexId> {
+    let mut out: Vec<VertexId> = vertices
+        .par_iter()
+        .with_min_len(256)
+        .filter(|&&v| mesh.is_vertex_alive(v))
+        .flat_map_iter(|&v| mesh.vertex_triangles(v).flat_map(|t| mesh.tri(t)))
+        .collect();
+    out.par_sort_unstable();
+    out.dedup();
+    out.retain(|&v| mesh.is_vertex_alive(v));
+    out
 }
 
 impl EditGuard for Recorder<'_> {
@@ -340,17 +426,17 @@ impl EditGuard for Recorder<'_> {
         self.inner.check(mesh, edit)
     }
 
+    fn offending_moves(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Option<Vec<usize>> {
+        self.inner.offending_moves(mesh, edit)
+    }
+
     fn committed(&mut self, mesh: &LabeledMesh, edit: &Edit, applied: &Applied) {
         self.inner.committed(mesh, edit, applied);
         if self.recording {
             for &t in &applied.triangles {
-                for v in mesh.tri(t) {
-                    self.note(v);
-                }
+                self.log.extend(mesh.tri(t));
             }
-            for m in &edit.moves {
-                self.note(m.vertex);
-            }
+            self.log.extend(edit.moves.iter().map(|m| m.vertex));
         }
     }
 }
@@ -399,6 +485,51 @@ fn edge_list(mesh: &LabeledMesh) -> Vec<EdgeItem> {
         .collect()
 }
 
+/// Every distinct edge with an end in `work` (increasing, each once), once, in parallel;
+/// `member` is scratch, all false on entry and on return.
+fn edges_at(mesh: &LabeledMesh, work: &[VertexId], member: &mut Vec<bool>) -> Vec<EdgeItem> {
+    if member.len() < mesh.vertex_capacity() {
+        member.resize(mesh.vertex_capacity(), false);
+    }
+    for &v in work {
+        member[v.idx()] = true;
+    }
+    let inside: &[bool] = member;
+    let edges = work
+        .par_iter()
+        .with_min_len(64)
+        .flat_map_iter(|&v| {
+            mesh.vertex_corners(v).flat_map(move |c| {
+                let t = c.tri();
+                let tri = mesh.tri(t);
+                let degenerate = tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2];
+                // The two edges at v are opposite the other two corners of the triangle.
+                [c.next(), c.prev()].into_iter().filter_map(move |k| {
+                    if degenerate {
+                        return None;
+                    }
+                    let star = features::edge_star(mesh, k);
+                    let [a, b] = mesh.corner_edge(k);
+                    let w = if a == v { b } else { a };
+                    // Once per edge: from its lowest-id triangle, and from the lower end
+                    // when both ends are in the work list.
+                    (star.min_tri == t && (!inside[w.idx()] || v < w)).then(|| EdgeItem {
+                        a,
+                        b,
+                        length: mesh.position(a).distance(mesh.position(b)),
+                        feature: star.is_feature(),
+                        corner: k,
+                    })
+                })
+            })
+        })
+        .collect();
+    for &v in work {
+        member[v.idx()] = false;
+    }
+    edges
+}
+
 /// Mean length of the distinct edges (0 for an empty mesh).
 pub fn mean_edge_length(mesh: &LabeledMesh) -> f64 {
     mean_length(&edge_list(mesh))
@@ -441,8 +572,10 @@ struct Run<'p> {
     collapse: CollapseScratch,
     edit: Edit,
     volumes: Vec<(crate::ids::Label, f64)>,
-    /// True once a smoothing pass has run over every vertex.
+    /// True once the first smoothing pass (over the whole work list) has run.
     smoothed: bool,
+    /// Scratch of [`edges_at`].
+    member: Vec<bool>,
 }
 
 impl<'p> Run<'p> {
@@ -468,6 +601,48 @@ impl<'p> Run<'p> {
             edit: Edit::default(),
             volumes: Vec::new(),
             smoothed: false,
+            member: Vec::new(),
+        }
+    }
+
+    /// The first sweep's work list of [`ImproveRegion::Around`]: the seeds' vertices and,
+    /// when `degraded`, those of every triangle out of range or shape.
+    fn initial_work(&self, mesh: &LabeledMesh, seeds: &[TriId], degraded: bool) -> Vec<VertexId> {
+        let (lo, hi) = self.range();
+        let min_angle = self.params.seed_min_angle_deg.to_radians();
+        let alive = mesh.tri_alive_flags();
+        let mut work: Vec<VertexId> = seeds
+            .iter()
+            .filter(|t| alive.get(t.idx()).copied().unwrap_or(false))
+            .flat_map(|&t| mesh.tri(t))
+            .collect();
+        if degraded {
+            work.par_extend(
+                (0..mesh.triangle_capacity())
+                    .into_par_iter()
+                    .with_min_len(1024)
+                    .filter(|&t| alive[t])
+                    .flat_map_iter(|t| {
+                        let t = TriId::new(t as u32);
+                        let p = mesh.tri_positions(t);
+                        let out = (0..3).any(|k| {
+                            let l = p[k].distance(p[(k + 1) % 3]);
+                            !(lo..=hi).contains(&l)
+                        }) || crate::geometry::triangle_min_angle(&p) < min_angle;
+                        out.then(|| mesh.tri(t)).into_iter().flatten()
+                    }),
+            );
+        }
+        work.par_sort_unstable();
+        work.dedup();
+        work
+    }
+
+    /// The candidate edges of a stage: every edge, or those at the work list.
+    fn candidate_edges(&mut self, mesh: &LabeledMesh, work: Option<&[VertexId]>) -> Vec<EdgeItem> {
+        match work {
+            None => self.edges(mesh).to_vec(),
+            Some(w) => edges_at(mesh, w, &mut self.member),
         }
     }
 
@@ -510,14 +685,11 @@ impl<'p> Run<'p> {
         mesh: &mut LabeledMesh,
         attrs: &mut VertexAttributes,
         guard: &mut dyn EditGuard,
+        work: Option<&[VertexId]>,
     ) -> usize {
         let (_, hi) = self.range();
-        let mut candidates: Vec<EdgeItem> = self
-            .edges(mesh)
-            .par_iter()
-            .filter(|e| e.length > hi)
-            .copied()
-            .collect();
+        let mut candidates = self.candidate_edges(mesh, work);
+        candidates.retain(|e| e.length > hi);
         candidates.par_sort_unstable_by(|x, y| {
             y.length
                 .total_cmp(&x.length)
@@ -559,14 +731,11 @@ impl<'p> Run<'p> {
         mesh: &mut LabeledMesh,
         attrs: &mut VertexAttributes,
         guard: &mut dyn EditGuard,
+        work: Option<&[VertexId]>,
     ) -> usize {
         let (lo, _) = self.range();
-        let mut candidates: Vec<EdgeItem> = self
-            .edges(mesh)
-            .par_iter()
-            .filter(|e| e.length < lo)
-            .copied()
-            .collect();
+        let mut candidates = self.candidate_edges(mesh, work);
+        candidates.retain(|e| e.length < lo);
         candidates.par_sort_unstable_by(|x, y| {
             x.length
                 .total_cmp(&y.length)
@@ -606,6 +775,7 @@ impl<'p> Run<'p> {
         mesh: &mut LabeledMesh,
         attrs: &mut VertexAttributes,
         guard: &mut dyn EditGuard,
+        work: Option<&[VertexId]>,
     ) -> usize {
         let params = FlipParams {
             criterion: self.params.flip_criterion,
@@ -614,7 +784,7 @@ impl<'p> Run<'p> {
         };
         let snapshot: &LabeledMesh = mesh;
         let mut candidates: Vec<(f64, VertexId, VertexId)> = self
-            .edges(snapshot)
+            .candidate_edges(snapshot, work)
             .par_iter()
             .filter(|e| !e.feature)
             .filter_map(|e| {
@@ -651,14 +821,16 @@ impl<'p> Run<'p> {
         done
     }
 
-    /// Null-space smoothing passes; feature-curve vertices come from the edge list. The
-    /// first sweep smooths every vertex, later ones the neighbourhoods of the edits made
-    /// since the previous pass (see [`Recorder`]).
+    /// Null-space smoothing passes. The first sweep smooths its whole work list (every
+    /// vertex for the whole mesh, with feature-curve vertices from the edge list), later
+    /// ones the neighbourhoods of the edits made since the previous pass (see
+    /// [`Recorder`]).
     fn smooth(
         &mut self,
         mesh: &mut LabeledMesh,
         attrs: &mut VertexAttributes,
         recorder: &mut Recorder<'_>,
+        work: Option<&[VertexId]>,
     ) {
         let params = SmoothParams {
             step: self.params.smooth_step,
@@ -669,20 +841,35 @@ impl<'p> Run<'p> {
         };
         let first = !self.smoothed;
         self.smoothed = true;
-        let only = recorder.take_neighbourhood(mesh);
-        if !first && only.is_empty() {
+        let mut only = recorder.take_smoothing(mesh);
+        if first && let Some(w) = work {
+            only.extend_from_slice(w);
+            only.par_sort_unstable();
+            only.dedup();
+        }
+        let whole = first && work.is_none();
+        if !whole && only.is_empty() {
             return;
         }
-        let mut counts = vec![0u32; mesh.vertex_capacity()];
-        for e in self.edges(mesh).iter().filter(|e| e.feature) {
-            counts[e.a.idx()] += 1;
-            counts[e.b.idx()] += 1;
-        }
+        // Feature-edge counts from the edge list pay off only for the whole mesh; a work
+        // list classifies its own vertices.
+        let counts = whole.then(|| {
+            let mut counts = vec![0u32; mesh.vertex_capacity()];
+            for e in self.edges(mesh).iter().filter(|e| e.feature) {
+                counts[e.a.idx()] += 1;
+                counts[e.b.idx()] += 1;
+            }
+            counts
+        });
         // Smoothing moves change no connectivity: nothing to note for the next pass.
         recorder.recording = false;
         for _ in 0..self.params.smooth_passes {
-            let proposals =
-                propose_moves(mesh, &params, Some(&counts), (!first).then_some(&only[..]));
+            let proposals = propose_moves(
+                mesh,
+                &params,
+                counts.as_deref(),
+                (!whole).then_some(&only[..]),
+            );
             let out = commit_moves(mesh, attrs, recorder, &params, &proposals);
             self.report.smooth.done += out.moved;
             self.report.smooth.refused += out.refused;

@@ -12,6 +12,7 @@
 //! - [`split`], [`flip`], [`collapse`], [`smooth`]: the mesh-improvement operations
 //!   (El Topo §3.5–3.6);
 //! - [`improve`]: the driver that sweeps them to keep edge lengths in range;
+//! - [`structure`]: the structural check every edit passes before it commits;
 //! - [`snap`]: vertex snapping and splits at given points (Los Topos §7.1 merging).
 //!
 //! `fixtures` (tests only) holds hand-built scenes shared with `tests/remesh_topology.rs`.
@@ -32,20 +33,23 @@ pub mod separate;
 pub mod smooth;
 pub mod snap;
 pub mod split;
+pub mod structure;
 
 pub use attributes::{Blend, VertexAttributes};
 pub use collapse::{CollapseError, CollapseParams, CollapseRefusal, collapse_edge};
-pub use degenerate::{DegenerateReport, remove_degenerate};
+pub use degenerate::{DegenerateReport, remove_degenerate, remove_degenerate_in};
 pub use edit::{Applied, Edit, EditError, NewVertex, VertexMove, VertexRef, apply_edit};
 pub use features::{FeatureParams, VertexKind, classify_vertex, classify_vertices};
 pub use flip::{FlipCriterion, FlipError, FlipParams, FlipRefusal, flip_edge};
-pub use guard::{EditGuard, NoGuard, StaticIntersectionGuard};
-pub use improve::{ImproveParams, ImproveReport, OpCounts, improve, improve_with};
-pub use pinch::pinch_singular_vertices;
+pub use guard::{EditGuard, NoGuard, StaticIntersectionGuard, bisect_moves};
+pub use improve::{
+    ImproveParams, ImproveRegion, ImproveReport, OpCounts, improve, improve_in, improve_with,
+};
+pub use pinch::{pinch_singular_vertices, pinch_singular_vertices_in};
 pub use region_graph::{RegionGraph, irregular_vertices};
 pub use separate::{
     AreaDecrease, SeparationParams, SeparationReport, SeparationStrength, VelocityDivergence,
-    separate_irregular_vertices,
+    separate_irregular_vertices, separate_irregular_vertices_in,
 };
 pub use smooth::{SmoothOutcome, SmoothParams, smooth_vertices};
 pub use snap::{
@@ -53,3 +57,4 @@ pub use snap::{
     split_triangle_at, undo_split,
 };
 pub use split::{SplitPlacement, split_edge};
+pub use structure::StructureFault;

@@ -91,16 +91,32 @@ impl Fan {
 /// Live vertices whose incident triangles form more than one edge-connected component,
 /// in increasing id order (found in parallel).
 pub fn singular_vertices(mesh: &LabeledMesh) -> Vec<VertexId> {
-    (0..mesh.vertex_capacity() as u32)
-        .into_par_iter()
-        .map(VertexId::new)
-        .filter(|&v| mesh.is_vertex_alive(v))
-        .map_init(Fan::default, |fan, v| {
-            fan.build(mesh, v);
-            fan.is_singular().then_some(v)
-        })
-        .flatten()
-        .collect()
+    singular_vertices_in(mesh, None)
+}
+
+/// [`singular_vertices`] among `only` (increasing, each once; `None`: every vertex).
+fn singular_vertices_in(mesh: &LabeledMesh, only: Option<&[VertexId]>) -> Vec<VertexId> {
+    let singular = |fan: &mut Fan, v: VertexId| {
+        if !mesh.is_vertex_alive(v) {
+            return None;
+        }
+        fan.build(mesh, v);
+        fan.is_singular().then_some(v)
+    };
+    match only {
+        None => (0..mesh.vertex_capacity() as u32)
+            .into_par_iter()
+            .map(VertexId::new)
+            .map_init(Fan::default, singular)
+            .flatten()
+            .collect(),
+        Some(vertices) => vertices
+            .par_iter()
+            .with_min_len(64)
+            .map_init(Fan::default, |fan, &v| singular(fan, v))
+            .flatten()
+            .collect(),
+    }
 }
 
 /// Duplicates every singular vertex once per component of its triangles (see the module
@@ -110,11 +126,22 @@ pub fn pinch_singular_vertices(
     attrs: &mut VertexAttributes,
     guard: &mut dyn EditGuard,
 ) -> usize {
+    pinch_singular_vertices_in(mesh, attrs, guard, None)
+}
+
+/// [`pinch_singular_vertices`] among the `only` vertices (`None`: every vertex), the work
+/// list of [`super::improve_in`].
+pub fn pinch_singular_vertices_in(
+    mesh: &mut LabeledMesh,
+    attrs: &mut VertexAttributes,
+    guard: &mut dyn EditGuard,
+    only: Option<&[VertexId]>,
+) -> usize {
     let mut fan = Fan::default();
     let mut edit = Edit::default();
     let mut centroids: Vec<(DVec3, f64)> = Vec::new();
     let mut pinched = 0;
-    for v in singular_vertices(mesh) {
+    for v in singular_vertices_in(mesh, only) {
         // Pinching one vertex never changes another's fan, but rebuild to stay honest.
         fan.build(mesh, v);
         if !fan.is_singular() {

@@ -171,12 +171,27 @@ pub fn separate_irregular_vertices(
     params: &SeparationParams,
     strength: &dyn SeparationStrength,
 ) -> SeparationReport {
+    separate_irregular_vertices_in(mesh, attrs, guard, params, strength, None)
+}
+
+/// [`separate_irregular_vertices`] among the `only` vertices (increasing, each once;
+/// `None`: every vertex), the work list of [`super::improve_in`]. `irregular_remaining`
+/// then counts the irregular vertices among them.
+pub fn separate_irregular_vertices_in(
+    mesh: &mut LabeledMesh,
+    attrs: &mut VertexAttributes,
+    guard: &mut dyn EditGuard,
+    params: &SeparationParams,
+    strength: &dyn SeparationStrength,
+    only: Option<&[VertexId]>,
+) -> SeparationReport {
     let mut report = SeparationReport::default();
     let mut scratch = Scratch::default();
     let mut scanned_current = false;
     for _ in 0..params.max_iterations {
         report.iterations += 1;
-        let (mut candidates, irregular, unseparable) = find_candidates(mesh, params, strength);
+        let (mut candidates, irregular, unseparable) =
+            find_candidates(mesh, params, strength, only);
         report.unseparable += unseparable;
         report.irregular_remaining = irregular;
         scanned_current = true;
@@ -209,7 +224,20 @@ pub fn separate_irregular_vertices(
         scanned_current = false;
     }
     if !scanned_current {
-        report.irregular_remaining = super::region_graph::irregular_vertices(mesh).len();
+        report.irregular_remaining = match only {
+            None => super::region_graph::irregular_vertices(mesh).len(),
+            Some(vertices) => {
+                let mut graph = RegionGraph::new();
+                vertices
+                    .iter()
+                    .filter(|&&v| mesh.is_vertex_alive(v))
+                    .filter(|&&v| {
+                        graph.build(mesh, v);
+                        !graph.is_complete()
+                    })
+                    .count()
+            }
+        };
     }
     report
 }
@@ -220,10 +248,19 @@ fn find_candidates(
     mesh: &LabeledMesh,
     params: &SeparationParams,
     strength: &dyn SeparationStrength,
+    only: Option<&[VertexId]>,
 ) -> (Vec<Candidate>, usize, usize) {
-    (0..mesh.vertex_capacity() as u32)
-        .into_par_iter()
-        .map(VertexId::new)
+    let all: Vec<VertexId>;
+    let vertices = match only {
+        Some(vertices) => vertices,
+        None => {
+            all = mesh.vertices().collect();
+            &all
+        }
+    };
+    vertices
+        .par_iter()
+        .copied()
         .filter(|&v| mesh.is_vertex_alive(v))
         .map_init(Scratch::default, |s, v| {
             s.graph.build(mesh, v);

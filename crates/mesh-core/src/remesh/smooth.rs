@@ -7,11 +7,13 @@
 //! shrinking the surface or rounding its features.
 //!
 //! Displacements are computed for all vertices in parallel from one snapshot (Jacobi
-//! style); each move is then committed serially as its own [`Edit`], so the guard checks
-//! every vertex against the mesh as it is at that moment, and each move is re-checked for
-//! inverted triangles, excessive normal rotation and volume change before it is offered.
-//! (A single batched edit would be cheaper to commit but would make the guard's verdict
-//! all-or-nothing: one blocked vertex would freeze the whole pass.)
+//! style), then committed in *batches*: independent sets of vertices (no two share a
+//! triangle), each move checked locally for inverted triangles, excessive normal rotation
+//! and volume change (in parallel: a move's triangles are its own), and the batch offered
+//! to the guard as one edit ([`EditGuard::offending_moves`]: one index query, or one CCD
+//! pseudo-motion, per batch instead of per move). The guard blames the offending moves;
+//! they are left out, the rest is asked about again and committed, and the blamed ones are
+//! retried one at a time, so one blocked vertex never freezes a batch.
 
 use glam::DVec3;
 use nalgebra::Matrix3;
@@ -22,9 +24,10 @@ use crate::ids::{Label, VertexId};
 use crate::mesh::LabeledMesh;
 
 use super::attributes::VertexAttributes;
-use super::edit::{Edit, EditError, VertexMove, apply_edit};
+use super::edit::{Edit, EditError, VertexMove, apply_edit, check_batch_structure, commit_guarded};
 use super::features::{self, FeatureParams, VertexKind};
 use super::guard::EditGuard;
+use super::structure::blame_moves;
 
 /// Parameters of [`smooth_vertices`].
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
@@ -104,7 +107,28 @@ pub fn smooth_vertices(
     commit_moves(mesh, attrs, guard, params, &proposals)
 }
 
-/// Commits proposed moves one edit at a time, in the given order.
+/// Rounds of batches per pass; what is left after them is committed one move at a time. A
+/// mesh's vertex colouring needs about 7 independent sets, each split into batches of at
+/// most [`MAX_BATCH`] moves.
+const MAX_BATCH_ROUNDS: usize = 64;
+
+/// Moves per batch at most. A guard that finds offenders by bisection (a CCD guard: the
+/// sweep of a batch is one pseudo-motion, and a collision somewhere in it says nothing of
+/// where) pays about `log₂(batch)` checks per offender, each of up to half the batch, so
+/// large batches would cost more than they save; 256 moves still keep both cores busy.
+const MAX_BATCH: usize = 256;
+
+/// Times the guard is asked about one batch, each time without the moves it blamed,
+/// before the rest of that batch is committed one move at a time.
+const MAX_GUARD_ROUNDS: usize = 4;
+
+/// Commits proposed moves in batches (see the module doc): each round takes, in the given
+/// order, the moves whose triangles no earlier move of the round touches (an independent
+/// set), makes the local checks of every move in parallel, and asks the guard about the
+/// batch once ([`EditGuard::offending_moves`]). Blamed moves, and whatever a batch could
+/// not clear, are committed one at a time afterwards, each as its own guarded edit, so
+/// the outcome is what per-move checking would allow, at the price of one index query
+/// per batch instead of one per move.
 pub(crate) fn commit_moves(
     mesh: &mut LabeledMesh,
     attrs: &mut VertexAttributes,
@@ -113,9 +137,113 @@ pub(crate) fn commit_moves(
     proposals: &[(VertexId, DVec3)],
 ) -> SmoothOutcome {
     let mut out = SmoothOutcome::default();
+    let mut pending: Vec<(VertexId, DVec3)> = proposals.to_vec();
+    let mut alone: Vec<(VertexId, DVec3)> = Vec::new();
+    let mut claimed = vec![false; mesh.triangle_capacity()];
+    let mut batch: Vec<(VertexId, DVec3)> = Vec::new();
+    let mut rest: Vec<(VertexId, DVec3)> = Vec::new();
     let mut edit = Edit::default();
+    for _ in 0..MAX_BATCH_ROUNDS {
+        if pending.is_empty() {
+            break;
+        }
+        // An independent set, greedily in the given order (deterministic).
+        batch.clear();
+        rest.clear();
+        for &(v, d) in &pending {
+            if !mesh.is_vertex_alive(v) {
+                out.refused += 1;
+            } else if batch.len() == MAX_BATCH || mesh.vertex_triangles(v).any(|t| claimed[t.idx()])
+            {
+                rest.push((v, d));
+            } else {
+                mesh.vertex_triangles(v)
+                    .for_each(|t| claimed[t.idx()] = true);
+                batch.push((v, d));
+            }
+        }
+        for &(v, _) in &batch {
+            mesh.vertex_triangles(v)
+                .for_each(|t| claimed[t.idx()] = false);
+        }
+        // Local checks, in parallel: each move's triangles are its own.
+        let snapshot: &LabeledMesh = mesh;
+        let checked: Vec<Option<(VertexMove, f64)>> = batch
+            .par_iter()
+            .with_min_len(64)
+            .map_init(
+                || (Edit::default(), Vec::new()),
+                |(scratch, volumes), &(v, d)| {
+                    local_move_check(snapshot, v, d, params, scratch, volumes)
+                },
+            )
+            .collect();
+        edit.clear();
+        let mut changes = Vec::with_capacity(checked.len());
+        for c in checked {
+            match c {
+                Some((m, dv)) => {
+                    edit.moves.push(m);
+                    changes.push(dv);
+                }
+                None => out.refused += 1,
+            }
+        }
+        let mut cleared = false;
+        for _ in 0..MAX_GUARD_ROUNDS {
+            if edit.moves.is_empty() {
+                break;
+            }
+            // The structure first (cheap, and it keeps labels consistent around the
+            // non-manifold edges the batch reorders), then the guard.
+            let verdict = match check_batch_structure(mesh, &edit) {
+                Ok(()) => guard.offending_moves(mesh, &edit),
+                Err(fault) => match blame_moves(mesh, &edit, &fault) {
+                    blamed if blamed.is_empty() => Some((0..edit.moves.len()).collect()),
+                    blamed => Some(blamed),
+                },
+            };
+            match verdict {
+                None => {
+                    cleared = true;
+                    break;
+                }
+                Some(blamed) => {
+                    let mut keep = 0;
+                    for i in 0..edit.moves.len() {
+                        let m = edit.moves[i];
+                        if blamed.binary_search(&i).is_ok() {
+                            alone.push((m.vertex, m.end - mesh.position(m.vertex)));
+                        } else {
+                            edit.moves[keep] = m;
+                            changes[keep] = changes[i];
+                            keep += 1;
+                        }
+                    }
+                    edit.moves.truncate(keep);
+                    changes.truncate(keep);
+                }
+            }
+        }
+        if cleared {
+            if commit_guarded(mesh, attrs, guard, &edit).is_ok() {
+                out.moved += edit.moves.len();
+                out.volume_change += changes.iter().sum::<f64>();
+            } else {
+                out.refused += edit.moves.len();
+            }
+        } else {
+            alone.extend(
+                edit.moves
+                    .iter()
+                    .map(|m| (m.vertex, m.end - mesh.position(m.vertex))),
+            );
+        }
+        std::mem::swap(&mut pending, &mut rest);
+    }
+    alone.append(&mut pending);
     let mut volumes = Vec::new();
-    for &(v, d) in proposals {
+    for &(v, d) in &alone {
         match smooth_vertex_in(&mut edit, &mut volumes, mesh, attrs, guard, v, d, params) {
             Ok(dv) => {
                 out.moved += 1;
@@ -204,8 +332,42 @@ enum SmoothError {
     Edit(#[from] EditError),
 }
 
-/// Moves `v` by `d` if no incident triangle inverts or rotates too far and no label volume
-/// changes by more than Ω; returns the largest label volume change.
+/// The local checks of moving `v` by `d`: no incident triangle inverts or rotates too far
+/// and no label volume changes by more than Ω. Returns the move and the largest label
+/// volume change it causes.
+fn local_move_check(
+    mesh: &LabeledMesh,
+    v: VertexId,
+    d: DVec3,
+    params: &SmoothParams,
+    scratch: &mut Edit,
+    volumes: &mut Vec<(Label, f64)>,
+) -> Option<(VertexMove, f64)> {
+    let end = mesh.position(v) + d;
+    for t in mesh.vertex_triangles(v) {
+        let old = mesh.tri_positions(t);
+        let new = mesh
+            .tri(t)
+            .map(|w| if w == v { end } else { mesh.position(w) });
+        if !features::normals_agree(&old, &new)
+            || features::normal_cos(&old, &new).is_none_or(|c| c < params.min_normal_cos)
+        {
+            return None;
+        }
+    }
+    let m = VertexMove {
+        vertex: v,
+        end,
+        blend: None,
+    };
+    scratch.clear();
+    scratch.moves.push(m);
+    let dv = features::max_label_volume_change(mesh, scratch, volumes);
+    (dv <= params.max_volume_change).then_some((m, dv))
+}
+
+/// Moves `v` by `d`, alone, if it passes [`local_move_check`] and the guard; returns the
+/// largest label volume change.
 #[allow(clippy::too_many_arguments)]
 fn smooth_vertex_in(
     edit: &mut Edit,
@@ -217,28 +379,13 @@ fn smooth_vertex_in(
     d: DVec3,
     params: &SmoothParams,
 ) -> Result<f64, SmoothError> {
-    let end = mesh.position(v) + d;
-    for t in mesh.vertex_triangles(v) {
-        let old = mesh.tri_positions(t);
-        let new = mesh
-            .tri(t)
-            .map(|w| if w == v { end } else { mesh.position(w) });
-        if !features::normals_agree(&old, &new)
-            || features::normal_cos(&old, &new).is_none_or(|c| c < params.min_normal_cos)
-        {
-            return Err(SmoothError::Refused);
-        }
-    }
-    edit.clear();
-    edit.moves.push(VertexMove {
-        vertex: v,
-        end,
-        blend: None,
-    });
-    let dv = features::max_label_volume_change(mesh, edit, volumes);
-    if dv > params.max_volume_change {
+    if !mesh.is_vertex_alive(v) {
         return Err(SmoothError::Refused);
     }
+    let (m, dv) =
+        local_move_check(mesh, v, d, params, edit, volumes).ok_or(SmoothError::Refused)?;
+    edit.clear();
+    edit.moves.push(m);
     apply_edit(mesh, attrs, guard, edit)?;
     Ok(dv)
 }

@@ -27,7 +27,7 @@ use crate::ids::{Label, TriId, VertexId};
 use crate::mesh::LabeledMesh;
 
 use super::attributes::{Blend, VertexAttributes};
-use super::edit::{Edit, EditError, NewVertex, VertexMove, VertexRef, apply_edit};
+use super::edit::{Edit, EditError, NewVertex, VertexMove, VertexRef, apply_snap_edit};
 use super::guard::EditGuard;
 
 /// Parameters of [`snap_vertices`].
@@ -129,7 +129,7 @@ pub fn snap_vertices(
         blend: None,
     });
     edit.remove_vertices.push(b);
-    apply_edit(mesh, attrs, guard, &edit)?;
+    apply_snap_edit(mesh, attrs, guard, &edit)?;
     Ok(a)
 }
 
@@ -224,7 +224,7 @@ pub fn split_edge_at(
             edit.add_tris.push((half, mesh.labels(t)));
         }
     }
-    apply_edit(mesh, attrs, guard, &edit).map(|applied| applied.vertices[0])
+    apply_snap_edit(mesh, attrs, guard, &edit).map(|applied| applied.vertices[0])
 }
 
 /// Trisects triangle `t = [p, q, r]` at the point with barycentric coordinates `bary`
@@ -270,7 +270,7 @@ pub fn split_triangle_at(
     for corners in [[v0, v1, m], [v1, v2, m], [v2, v0, m]] {
         edit.add_tris.push((corners, labels));
     }
-    apply_edit(mesh, attrs, guard, &edit).map(|applied| applied.vertices[0])
+    apply_snap_edit(mesh, attrs, guard, &edit).map(|applied| applied.vertices[0])
 }
 
 /// The triangles a split replaced, kept so that [`undo_split`] can put them back when the
@@ -341,7 +341,7 @@ pub fn undo_split(
         edit.add_tris.push((tri.map(VertexRef::Old), labels));
     }
     edit.remove_vertices.push(vertex);
-    apply_edit(mesh, attrs, &mut Trusted(guard), &edit).map(|_| ())
+    apply_snap_edit(mesh, attrs, &mut Trusted(guard), &edit).map(|_| ())
 }
 
 /// Forwards commits to the wrapped guard without asking it: for edits that restore a

@@ -13,7 +13,7 @@ use super::report::{Listed, ValidationReport};
 use super::topology::{CHUNK, EdgeContext};
 use crate::ids::{TriId, VertexId};
 use crate::mesh::LabeledMesh;
-use crate::predicates::{Axis, Sign, orient2d_axis};
+use crate::predicates::collinear;
 
 /// Runs layer 3.
 pub(super) fn check(
@@ -71,7 +71,5 @@ pub(super) fn is_zero_area(mesh: &LabeledMesh, t: TriId) -> bool {
     if !(p.is_finite() && q.is_finite() && r.is_finite()) {
         return false;
     }
-    Axis::ALL
-        .iter()
-        .all(|&axis| orient2d_axis(axis, p, q, r) == Sign::Zero)
+    collinear(p, q, r)
 }
