@@ -232,10 +232,8 @@ impl Tracker {
 
     /// Gives the combined attributes to the backend, or keeps them if it carries none.
     fn install(&mut self, attrs: VertexAttributes) {
-        self.own = match self.inner.set_attributes(attrs) {
-            Ok(()) => None,
-            Err(attrs) => Some(attrs),
-        };
+        // Handed back (`Err`) when the backend carries none: then they are ours.
+        self.own = self.inner.set_attributes(attrs).err();
     }
 }
 
@@ -274,9 +272,9 @@ impl PointGrid {
         };
         for (i, p) in points.iter().enumerate() {
             let c = grid.key(*p);
-            for k in 0..3 {
-                grid.lo[k] = grid.lo[k].min(c[k]);
-                grid.hi[k] = grid.hi[k].max(c[k]);
+            for (k, &ck) in c.iter().enumerate() {
+                grid.lo[k] = grid.lo[k].min(ck);
+                grid.hi[k] = grid.hi[k].max(ck);
             }
             grid.cells.entry(c).or_default().push(i);
         }

@@ -81,7 +81,8 @@ impl<'a> Spec<'a> {
     /// Refuses keys outside `known` (and, for `normal`, the `A-B` pair keys).
     fn check_keys(&self, known: &[&str], pair_keys: bool) -> Result<(), SceneError> {
         for (k, _) in &self.pairs {
-            if !known.contains(k) && !(pair_keys && pair_key(k).is_some()) {
+            let is_pair = pair_keys && pair_key(k).is_some();
+            if !(known.contains(k) || is_pair) {
                 let extra = if pair_keys {
                     ", or A-B for a label pair"
                 } else {
