@@ -13,6 +13,8 @@
 //!
 //! Every backend implements [`SurfaceTracker`]: propose new vertex positions, call
 //! `advance`, read back a clean mesh. A failed step leaves the previous mesh intact.
+//! [`Tracker`] adds named per-vertex attributes (velocities, …) that follow the mesh
+//! through every step, on either backend.
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
@@ -23,6 +25,9 @@ pub use collision_tracker;
 pub use grid_tracker;
 pub use mesh_core;
 pub use mesh_core::{LabeledMesh, StepReport, SurfaceTracker, TrackError};
+pub use tracker::{AttributeError, Tracker};
+
+mod tracker;
 
 /// The tracker backends, selectable by name at run time.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

@@ -187,7 +187,12 @@ pub fn run_scene_with(
     let initial_report = validate(&scene.mesh, &validate_options);
     let mut record = RunRecord {
         schema: RUN_SCHEMA.to_string(),
-        scene: scene.name.to_string(),
+        // A user-mesh scene is named by its flow spec, which a replay needs.
+        scene: if config.scene.starts_with(crate::scenes::user::PREFIX) {
+            config.scene.clone()
+        } else {
+            scene.name.to_string()
+        },
         tracker: config.backend.name().to_string(),
         seed: config.options.seed,
         count: scene.count,

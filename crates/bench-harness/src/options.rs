@@ -296,7 +296,13 @@ impl OptionsBuilder {
         if path.is_empty() {
             return Err(OptionsError::Syntax(assignment.to_string()));
         }
-        set_path(&mut self.tree, path, parse_value(value))?;
+        self.set_value(path, parse_value(value))
+    }
+
+    /// Sets `path` to an already parsed value: `--set` without the text, for callers
+    /// whose values come typed (the Python bindings' keyword options).
+    pub fn set_value(&mut self, path: &str, value: Value) -> Result<&mut Self, OptionsError> {
+        set_path(&mut self.tree, path, value)?;
         from_tree(self.tree.clone(), path)?;
         self.set.push(path.to_string());
         Ok(self)

@@ -292,4 +292,13 @@ impl SurfaceTracker for GridTracker {
             substeps: 1,
         })
     }
+
+    fn attributes(&self) -> Option<&VertexAttributes> {
+        Some(&self.attrs)
+    }
+
+    fn set_attributes(&mut self, attrs: VertexAttributes) -> Result<(), VertexAttributes> {
+        self.attrs = attrs;
+        Ok(())
+    }
 }

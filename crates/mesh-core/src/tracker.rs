@@ -12,6 +12,7 @@ use serde::Serialize;
 
 use crate::ids::VertexId;
 use crate::mesh::LabeledMesh;
+use crate::remesh::VertexAttributes;
 
 /// A surface tracker backend.
 pub trait SurfaceTracker: Send {
@@ -25,6 +26,23 @@ pub trait SurfaceTracker: Send {
     /// `VertexId`; positions of dead slots are ignored), resolves the topology the motion
     /// implies, improves the mesh, and reports what it did. On error the mesh is unchanged.
     fn advance(&mut self, proposed: &[DVec3]) -> Result<StepReport, TrackError>;
+
+    /// The per-vertex attributes (velocities, temperatures, …) the backend itself carries
+    /// through its steps, indexed like [`Self::mesh`]'s vertex slots; `None` (the
+    /// default) when it carries none. A backend that implements this keeps them on
+    /// surviving vertices, blends them through its edits and transfers them to the
+    /// vertices it rebuilds, which only it can do well (the grid backend by PIC, §8.4).
+    fn attributes(&self) -> Option<&VertexAttributes> {
+        None
+    }
+
+    /// Hands the backend attributes to carry (`dim` values per vertex slot of
+    /// [`Self::mesh`], e.g. from `VertexAttributes::zeros`). A backend that carries none
+    /// gives them back as `Err`, and the caller must carry them itself (the facade's
+    /// `surftrack::Tracker` does, by nearest-vertex transfer after each step).
+    fn set_attributes(&mut self, attrs: VertexAttributes) -> Result<(), VertexAttributes> {
+        Err(attrs)
+    }
 }
 
 /// Wall time of one pipeline stage.

@@ -128,6 +128,8 @@ Examples:
   surftrack run spheres --spheres 20 --seed 1 --steps 40 --tracker grid
   surftrack run enright --resolution 16 --every 10 --tracker collision
   surftrack run copies --mesh bunny.ply --count 3
+  surftrack run --mesh my.ply --flow normal:speed=0.5,1-2=0.2 --tracker collision
+  surftrack run --mesh my.obj --flow enright:period=2 --steps 100 --every 10
   surftrack run rolling --set grid.resampling=global --set grid.improve_scope=changed
   surftrack run spheres --config scenario.toml --print-options
   surftrack run --from-record out/db/run.json --out out/db-replay
@@ -154,7 +156,7 @@ pub struct SceneArgs {
     /// Radius (`double-bubble`, `inversion`, `cyclic`).
     #[arg(long)]
     pub radius: Option<f64>,
-    /// Input mesh for `copies` (.ply or .obj).
+    /// Input mesh for `copies`, or the mesh `run --flow` moves (.ply or .obj).
     #[arg(long)]
     pub mesh: Option<PathBuf>,
 }
@@ -179,9 +181,20 @@ pub struct OptionArgs {
 #[derive(Debug, Args)]
 #[command(after_long_help = RUN_EXAMPLES)]
 pub struct RunArgs {
-    /// The scene (`surftrack scenes` lists them); not needed with --from-record.
-    #[arg(required_unless_present = "from_record", default_value = "")]
+    /// The scene (`surftrack scenes` lists them); not needed with --from-record or --flow.
+    #[arg(required_unless_present_any = ["from_record", "flow"], default_value = "")]
     pub scene: String,
+    /// A built-in flow on your own mesh (`--mesh FILE`, labelled or a closed unlabelled
+    /// surface) instead of a scene: `normal[:speed=S,A-B=S,scheme=face_offsetting]`,
+    /// `enright[:period=T]`, `curl-noise[:seed=,modes=,length=,amplitude=]`,
+    /// `rotation[:axis=z,period=T,cx=,cy=,cz=]`, `mean-curvature[:tension=K]`. Same frames,
+    /// record and plots as a scene; 40 steps unless --steps.
+    #[arg(
+        long,
+        value_name = "NAME[:key=value,...]",
+        conflicts_with = "from_record"
+    )]
+    pub flow: Option<String>,
     /// Reproduce a run from its `run.json`: same scene, scene parameters, backend, seed,
     /// steps, time step and options (`--set`, `--config`, `--steps`, `--out` still apply).
     /// Bit-identical output for the same thread count (`RAYON_NUM_THREADS`).

@@ -1,4 +1,5 @@
-//! `surftrack run SCENE`: one scene through one backend, frames and a record on disk.
+//! `surftrack run SCENE` (or `run --mesh FILE --flow NAME[:key=value,…]`, a built-in flow
+//! on the user's mesh): one scene through one backend, frames and a record on disk.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -13,7 +14,7 @@ use crate::isolate::{EXIT_RUN_FAILED, EXIT_UNAVAILABLE};
 use crate::options::{OptionsBuilder, RunOptions, option_lines};
 use crate::record::{FailureReason, RunRecord, SceneParams};
 use crate::report::{run_plots, write_files};
-use crate::scenes::SceneOptions;
+use crate::scenes::{SceneOptions, user};
 
 use super::{OptionArgs, RunArgs, SceneArgs, output};
 
@@ -97,10 +98,26 @@ struct Plan {
 
 fn plan(args: &RunArgs) -> anyhow::Result<Plan> {
     let Some(path) = &args.from_record else {
-        if args.scene.is_empty() {
-            anyhow::bail!("a scene is required (or --from-record run.json)");
-        }
-        let scene = args.scene.clone();
+        let scene = match &args.flow {
+            Some(flow) => {
+                if !args.scene.is_empty() {
+                    anyhow::bail!(
+                        "give a scene or --flow on --mesh, not both (scene `{}`)",
+                        args.scene
+                    );
+                }
+                if args.scene_args.mesh.is_none() {
+                    anyhow::bail!("--flow runs on your own mesh: give it with --mesh FILE");
+                }
+                user::scene_name(flow)
+            }
+            None if args.scene.is_empty() => {
+                anyhow::bail!(
+                    "a scene is required (or --from-record run.json, or --mesh with --flow)"
+                )
+            }
+            None => args.scene.clone(),
+        };
         return Ok(Plan {
             scene,
             backend: args.tracker,
@@ -154,7 +171,12 @@ pub(super) fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
         return Ok(ExitCode::SUCCESS);
     }
     let out = args.out.clone().unwrap_or_else(|| {
-        PathBuf::from("out").join(format!("{}-{}", plan.scene, plan.backend.name()))
+        let name = if plan.scene.starts_with(user::PREFIX) {
+            "mesh"
+        } else {
+            &plan.scene
+        };
+        PathBuf::from("out").join(format!("{name}-{}", plan.backend.name()))
     });
     let config = RunConfig {
         scene: plan.scene.clone(),

@@ -16,12 +16,15 @@
 //! | `rolling` | two decorated spheres roll into each other, merge and roll apart: feature preservation (2024 Fig. 17) |
 //! | `metaballs` | an animated implicit surface followed by Newton projection: two skeleton segments cross, blend, split (Nesme & Bouthors 2006, Fig. 1) |
 //!
+//! `mesh:<flow>` runs a built-in flow on the user's mesh ([`user`]).
+//!
 //! Sizes default to a few thousand triangles so a run takes seconds to minutes; the
 //! options of [`SceneOptions`] scale them.
 
 pub mod metaballs;
 mod quadrant_sphere;
 pub mod rolling;
+pub mod user;
 
 use glam::DVec3;
 use mesh_core::generators::{
@@ -164,6 +167,14 @@ pub enum SceneError {
     /// The flow refused its parameters.
     #[error(transparent)]
     Flow(#[from] FlowError),
+    /// A `--flow NAME[:key=value,…]` on a user mesh could not be read.
+    #[error("--flow {spec}: {message}")]
+    FlowSpec {
+        /// The spec as given.
+        spec: String,
+        /// What is wrong, naming what is known.
+        message: String,
+    },
 }
 
 /// A tracked scene: where it starts, how it moves, and for how long by default.
@@ -215,6 +226,9 @@ pub fn build_tracked_with(
     o: &SceneOptions,
     flow_options: &FlowOptions,
 ) -> Result<Scene, SceneError> {
+    if let Some(spec) = name.strip_prefix(user::PREFIX) {
+        return user::build(spec, o, flow_options);
+    }
     let info = scene_info(name).ok_or_else(|| SceneError::Unknown(name.to_string()))?;
     if info.steps == 0 {
         return Err(SceneError::NotTracked(name.to_string()));
