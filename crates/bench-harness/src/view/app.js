@@ -1,6 +1,7 @@
 // The `surftrack view` page: panels of runs drawn by three.js with one shared orbit
 // camera. Frames are decoded from their base64 elements only when first shown.
-// `window.surftrackView` reports state for tests and scripts (ready, timings, step).
+// `window.surftrackView` reports state for tests and scripts (ready, timings in ms,
+// step).
 import * as THREE from 'three';
 import { OrbitControls } from 'three-orbit-controls';
 
@@ -295,6 +296,8 @@ try {
   panels.forEach(resize);
   renderAll();
   state.timings.firstRender = performance.now() - started;
+  // From navigation start: reading the file, parsing the page, three.js, first picture.
+  state.timings.readySinceNavigation = performance.now();
   state.ready = true;
 } catch (e) {
   state.error = String(e && e.message ? e.message : e);
