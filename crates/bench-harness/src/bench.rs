@@ -127,6 +127,8 @@ pub fn child_args(
         "--out".into(),
         dir.as_os_str().to_owned(),
         "--quiet".into(),
+        // The benchmark's report pictures its runs; a page per child would only cost.
+        "--no-view".into(),
     ];
     if let Some(steps) = o.steps {
         args.extend(["--steps".into(), steps.to_string().into()]);
@@ -358,5 +360,6 @@ mod tests {
         assert_eq!(run.max_triangles, Some(1000));
         assert_eq!(run.simulate, Some(Simulate::Hang));
         assert!(run.quiet);
+        assert!(run.no_view, "children write no page");
     }
 }

@@ -15,7 +15,8 @@
 //! | [`bench`](mod@bench) | the robustness benchmark (2024 paper §9.6) and the backend comparison |
 //! | [`ablate`] | research ablations: option variants × seeds, isolated, summarised per variant |
 //! | [`record`] | the JSON records (`run.json`, `robustness.json`, `compare.json`) and shard merging |
-//! | [`report`] | markdown tables and SVG plots |
+//! | [`report`] | markdown tables, SVG plots and PNG pictures of frames |
+//! | [`view`] | `surftrack view`: a self-contained WebGL page of runs' frames |
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
@@ -30,3 +31,4 @@ pub mod preservation;
 pub mod record;
 pub mod report;
 pub mod scenes;
+pub mod view;

@@ -10,6 +10,7 @@ use surftrack::Backend;
 use crate::ablate::{AblateError, AblatePlan, PRESETS, ablate, parse_vary, preset, variants};
 use crate::bench::ChildOptions;
 use crate::isolate::Limits;
+use crate::report::picture::PicturedRun;
 use crate::report::{ablate_markdown, ablate_plots, ablate_table, write_files};
 use crate::scenes::scene_info;
 
@@ -99,7 +100,11 @@ pub(super) fn run(args: &AblateArgs) -> anyhow::Result<ExitCode> {
         child: ChildOptions {
             steps: args.steps,
             count: args.scene_args.count,
-            every: 0,
+            every: if args.no_pictures {
+                0
+            } else {
+                super::view::ENDS_ONLY
+            },
             max_triangles: args.max_triangles,
             simulate: None,
         },
@@ -116,9 +121,25 @@ pub(super) fn run(args: &AblateArgs) -> anyhow::Result<ExitCode> {
     let record = ablate(&exe, &plan, &progress);
     progress.finish_and_clear();
     let json = serde_json::to_string_pretty(&record)?;
+    let mut report = ablate_markdown(&record);
+    if !args.no_pictures {
+        // The first seed of every variant, pictured with one camera.
+        let runs: Vec<PicturedRun> = record
+            .variants
+            .iter()
+            .filter_map(|v| {
+                let run = record.runs.iter().find(|r| r.variant == v.variant.name)?;
+                Some(PicturedRun {
+                    label: format!("{} (seed {})", v.variant.name, run.run.seed),
+                    dir: out.join(&run.dir),
+                })
+            })
+            .collect();
+        report.push_str(&super::view::bench_pictures(&runs, &out));
+    }
     let mut files = vec![
         ("ablate.json".to_string(), json.clone()),
-        ("report.md".to_string(), ablate_markdown(&record)),
+        ("report.md".to_string(), report),
     ];
     files.extend(ablate_plots(&record));
     write_files(&out, &files).with_context(|| format!("writing to {}", out.display()))?;

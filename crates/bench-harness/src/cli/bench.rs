@@ -12,6 +12,7 @@ use crate::bench::{
 };
 use crate::isolate::Limits;
 use crate::record::{BackendSummary, BenchConfig, RobustnessRecord, merge_records};
+use crate::report::picture::PicturedRun;
 use crate::report::{
     compare_markdown, robustness_markdown, robustness_plots, robustness_table, write_files,
 };
@@ -49,14 +50,23 @@ struct JsonSummary<'a> {
     summary: &'a [BackendSummary],
 }
 
-/// Writes robustness.json, report.md and the plots; prints the table or the JSON.
-fn publish(record: &RobustnessRecord, out: &Path, json: bool) -> anyhow::Result<()> {
+/// Writes robustness.json, report.md (with `pictures` appended) and the plots; prints the
+/// table or the JSON.
+fn publish(
+    record: &RobustnessRecord,
+    out: &Path,
+    json: bool,
+    pictures: &str,
+) -> anyhow::Result<()> {
     let text = serde_json::to_string_pretty(record)?;
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let record_path = out.join("robustness.json");
     std::fs::write(&record_path, text)
         .with_context(|| format!("writing {}", record_path.display()))?;
-    let mut files = vec![("report.md".to_string(), robustness_markdown(record))];
+    let mut files = vec![(
+        "report.md".to_string(),
+        format!("{}{pictures}", robustness_markdown(record)),
+    )];
     files.extend(robustness_plots(record));
     write_files(out, &files).with_context(|| format!("writing the report to {}", out.display()))?;
     if json {
@@ -118,13 +128,34 @@ pub(super) fn robustness(args: &RobustnessArgs) -> anyhow::Result<ExitCode> {
         shard: args.shard,
         jobs: args.jobs,
         out: out.clone(),
-        every: args.every,
+        every: match (args.every, args.no_pictures) {
+            (0, false) => super::view::ENDS_ONLY,
+            (every, _) => every,
+        },
         simulate: args.simulate,
     };
     let progress = output::progress_bar(args.quiet || args.json, 0, "robustness");
     let record = run_robustness(&current_exe()?, &plan, &progress);
     progress.finish_and_clear();
-    publish(&record, &out, args.json)?;
+    let pictures = if args.no_pictures {
+        String::new()
+    } else {
+        // The first seed of every backend (of this shard), pictured with one camera.
+        let runs: Vec<PicturedRun> = record
+            .config
+            .trackers
+            .iter()
+            .filter_map(|t| {
+                let run = record.runs.iter().find(|r| &r.tracker == t)?;
+                Some(PicturedRun {
+                    label: format!("{t} (seed {})", run.seed),
+                    dir: out.join("runs").join(format!("{t}-seed-{:04}", run.seed)),
+                })
+            })
+            .collect();
+        super::view::bench_pictures(&runs, &out)
+    };
+    publish(&record, &out, args.json, &pictures)?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -155,7 +186,7 @@ pub(super) fn merge(args: &MergeArgs) -> anyhow::Result<ExitCode> {
             merged.runs.len()
         );
     }
-    publish(&merged, &args.out, args.json)?;
+    publish(&merged, &args.out, args.json, "")?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -185,7 +216,10 @@ pub(super) fn compare(args: &CompareArgs) -> anyhow::Result<ExitCode> {
         child: ChildOptions {
             steps: args.steps,
             count: args.count,
-            every: args.every,
+            every: match (args.every, args.no_pictures) {
+                (0, false) => super::view::ENDS_ONLY,
+                (every, _) => every,
+            },
             max_triangles: args.max_triangles,
             simulate: None,
         },
@@ -199,7 +233,18 @@ pub(super) fn compare(args: &CompareArgs) -> anyhow::Result<ExitCode> {
     let progress = output::progress_bar(args.quiet || args.json, 0, "compare");
     let record = run_compare(&current_exe()?, &plan, &progress);
     progress.finish_and_clear();
-    let markdown = compare_markdown(&record);
+    let mut markdown = compare_markdown(&record);
+    if !args.no_pictures {
+        let runs: Vec<PicturedRun> = record
+            .rows
+            .iter()
+            .map(|r| PicturedRun {
+                label: format!("{} · {}", r.scene, r.run.tracker),
+                dir: args.out.join(format!("{}-{}", r.scene, r.run.tracker)),
+            })
+            .collect();
+        markdown.push_str(&super::view::bench_pictures(&runs, &args.out));
+    }
     let json = serde_json::to_string_pretty(&record)?;
     write_files(
         &args.out,

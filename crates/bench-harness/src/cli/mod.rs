@@ -22,6 +22,9 @@ mod output;
 mod run;
 mod scenes;
 mod validate;
+mod view;
+
+pub use view::ViewArgs;
 
 const MAIN_EXAMPLES: &str = "\
 Examples:
@@ -88,6 +91,10 @@ pub enum Command {
     /// cannot be read.
     #[command(after_long_help = FIX_EXAMPLES)]
     Fix(FixArgs),
+    /// Write one self-contained HTML page (WebGL, no network) showing the frames of one
+    /// or more runs side by side: orbit camera, colours by material pair, toggles, a cut
+    /// plane, a frame slider with the step's record and the run's plots.
+    View(ViewArgs),
 }
 
 const FIX_EXAMPLES: &str = "\
@@ -138,7 +145,8 @@ Output (in --out, default out/<scene>-<tracker>): frame_0000.ply (the initial me
 then every --every steps and the last step; run.json (schema surftrack.run/1:
 scene, tracker, seed, steps, success, failure {reason, message, step}, wall_seconds,
 peak_triangles, events, stage_seconds, per_step [...]); time_per_step.svg and
-triangles_per_step.svg.
+triangles_per_step.svg; unless --no-view, view.html (the frames in a browser, see
+`surftrack view`) and report.md with pictures (pictures/*.png) of the first and last frame.
 
 Failure reasons: unavailable, error, panic, invalid, memory (--max-triangles).
 Exit codes: 0 success, 1 the run failed, 2 usage or I/O error, 3 backend unavailable.";
@@ -239,6 +247,10 @@ pub struct RunArgs {
     /// No progress bar and no summary (errors still go to stderr).
     #[arg(long, short = 'q')]
     pub quiet: bool,
+    /// Write neither view.html (`surftrack view` of the run) nor report.md with its
+    /// pictures (the benchmarks' children run so; their reports picture them).
+    #[arg(long)]
+    pub no_view: bool,
     /// Scene parameters.
     #[command(flatten)]
     pub scene_args: SceneArgs,
@@ -330,7 +342,8 @@ pub struct RobustnessArgs {
     /// Memory guard: a child above this resident memory (MiB, Linux) is killed; 0 = off.
     #[arg(long, default_value_t = 8192)]
     pub max_memory_mib: u64,
-    /// Keep frames of every run, every N steps (0: none).
+    /// Keep frames of every run, every N steps (0: only the first and last, for the
+    /// report's pictures; none with --no-pictures).
     #[arg(long, default_value_t = 0)]
     pub every: usize,
     /// Print the per-backend summary as JSON instead of the table.
@@ -339,6 +352,10 @@ pub struct RobustnessArgs {
     /// No progress bar.
     #[arg(long, short = 'q')]
     pub quiet: bool,
+    /// No pictures in the report and no view.html (children then keep no frames unless
+    /// --every asks).
+    #[arg(long)]
+    pub no_pictures: bool,
     /// Test hook passed to every child (hang, panic).
     #[arg(long, hide = true)]
     pub simulate: Option<Simulate>,
@@ -390,7 +407,8 @@ pub struct CompareArgs {
     /// Output directory.
     #[arg(long, default_value = "out/compare")]
     pub out: PathBuf,
-    /// Keep frames every N steps (0: none).
+    /// Keep frames every N steps (0: only the first and last, for the pictures; none
+    /// with --no-pictures).
     #[arg(long, default_value_t = 0)]
     pub every: usize,
     /// Memory guard: triangle cap per run.
@@ -402,6 +420,10 @@ pub struct CompareArgs {
     /// Print compare.json on stdout instead of the table.
     #[arg(long)]
     pub json: bool,
+    /// No pictures in compare.md and no view.html (children then keep no frames unless
+    /// --every asks).
+    #[arg(long)]
+    pub no_pictures: bool,
     /// No progress bar.
     #[arg(long, short = 'q')]
     pub quiet: bool,
@@ -483,6 +505,9 @@ pub struct AblateArgs {
     /// Print ablate.json on stdout instead of the table.
     #[arg(long)]
     pub json: bool,
+    /// No pictures in report.md and no view.html (the children then keep no frames).
+    #[arg(long)]
+    pub no_pictures: bool,
     /// No progress bar.
     #[arg(long, short = 'q')]
     pub quiet: bool,
@@ -591,6 +616,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         },
         Command::Scenes(args) => scenes::run(&args),
         Command::Fix(args) => fix::run(&args),
+        Command::View(args) => view::run(&args),
     }
 }
 

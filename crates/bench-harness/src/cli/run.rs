@@ -13,8 +13,10 @@ use crate::driver::{RunConfig, run_scene};
 use crate::isolate::{EXIT_RUN_FAILED, EXIT_UNAVAILABLE};
 use crate::options::{OptionsBuilder, RunOptions, option_lines};
 use crate::record::{FailureReason, RunRecord, SceneParams};
-use crate::report::{run_plots, write_files};
+use crate::report::picture::{PicturedRun, pictures_section};
+use crate::report::{run_markdown, run_plots, write_files};
 use crate::scenes::{SceneOptions, user};
+use crate::view::ViewSource;
 
 use super::{OptionArgs, RunArgs, SceneArgs, output};
 
@@ -210,10 +212,22 @@ pub(super) fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
             .with_context(|| format!("writing plots to {}", out.display()))?;
     }
 
+    let page = if args.no_view || record.frames.is_empty() {
+        None
+    } else {
+        Some(write_view_and_report(&record, &out)?)
+    };
     if args.json {
         println!("{}", serde_json::to_string_pretty(&record)?);
     } else if !args.quiet {
         print_summary(&record, &out, &record_path);
+        if let Some(page) = page {
+            println!(
+                "report: {}\nview: {}",
+                out.join("report.md").display(),
+                page.display()
+            );
+        }
     }
     let code = match &record.failure {
         None => ExitCode::SUCCESS,
@@ -273,4 +287,23 @@ fn print_summary(record: &RunRecord, out: &Path, record_path: &Path) {
         _ => println!("frames: none written"),
     }
     println!("record: {}", record_path.display());
+}
+
+/// Writes `view.html` (every frame of the run) and `report.md` with pictures of the first
+/// and last frames; returns the page's path.
+fn write_view_and_report(record: &RunRecord, out: &Path) -> anyhow::Result<PathBuf> {
+    let page = out.join("view.html");
+    let source = ViewSource::open(out)?;
+    super::view::write_page_file(&[source], &page)?;
+    let pictures = pictures_section(
+        &[PicturedRun {
+            label: format!("{} · {}", record.scene, record.tracker),
+            dir: out.to_path_buf(),
+        }],
+        out,
+    )?;
+    let report = format!("{}{pictures}", run_markdown(record, Some("view.html")));
+    write_files(out, &[("report.md".into(), report)])
+        .with_context(|| format!("writing the report to {}", out.display()))?;
+    Ok(page)
 }

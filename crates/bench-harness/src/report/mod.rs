@@ -4,6 +4,7 @@
 //! table the unsharded one would, and the tests can compare strings.
 
 pub mod ablate;
+pub mod picture;
 pub mod svg;
 
 use std::fmt::Write;
@@ -267,6 +268,56 @@ pub fn compare_markdown(record: &CompareRecord) -> String {
                 f.message.lines().next().unwrap_or("")
             );
         }
+    }
+    md
+}
+
+/// The report of one run: what ran, how it ended, a link to its page (`view`, relative
+/// to the report) and its plots; the caller appends the pictures.
+pub fn run_markdown(record: &RunRecord, view: Option<&str>) -> String {
+    let mut md = String::new();
+    let _ = writeln!(
+        md,
+        "# {} with {} (seed {})\n",
+        record.scene, record.tracker, record.seed
+    );
+    let outcome = match &record.failure {
+        None => "succeeded, every frame valid".to_string(),
+        Some(f) => format!(
+            "**failed** ({}) at step {}: {}",
+            f.reason,
+            f.step.map_or("–".to_string(), |s| s.to_string()),
+            f.message.lines().next().unwrap_or("")
+        ),
+    };
+    let last = record
+        .per_step
+        .last()
+        .map_or(record.initial.triangles, |s| s.triangles);
+    let _ = writeln!(
+        md,
+        "{} of {} steps in {:.2} s; {outcome}. Triangles {} → {} (peak {}); {} merges, {} splits, {} T1, {} T2.\n",
+        record.steps_completed,
+        record.steps,
+        record.wall_seconds,
+        record.initial.triangles,
+        last,
+        record.peak_triangles,
+        record.events.merges,
+        record.events.splits,
+        record.events.t1,
+        record.events.t2,
+    );
+    if let Some(view) = view {
+        let _ = writeln!(
+            md,
+            "Every frame in a browser (no network needed): [{view}]({view}) (`surftrack view`).\n"
+        );
+    }
+    if !record.per_step.is_empty() {
+        md.push_str(
+            "![time per step](time_per_step.svg) ![triangles per step](triangles_per_step.svg)\n",
+        );
     }
     md
 }
