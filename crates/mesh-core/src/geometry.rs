@@ -344,7 +344,9 @@ mod tests {
     fn ordered_sum_is_bit_identical_for_any_thread_count() {
         // Terms of very different magnitudes, so that any change of association changes
         // the last bits; a plain rayon sum fails the reference comparison below.
-        let f = |i: usize| ((i * 7919) % 1000) as f64 * 1e-3 + if i % 97 == 0 { 1e9 } else { 0.0 };
+        let f = |i: usize| {
+            ((i * 7919) % 1000) as f64 * 1e-3 + if i.is_multiple_of(97) { 1e9 } else { 0.0 }
+        };
         let n = 5 * CHUNK + 7;
         let reference: f64 = (0..n)
             .collect::<Vec<_>>()
