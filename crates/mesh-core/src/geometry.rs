@@ -112,15 +112,33 @@ pub fn triangle_areas(mesh: &LabeledMesh) -> IdVec<TriId, f64> {
     per_triangle(mesh, 0.0, |p| triangle_area(&p))
 }
 
-/// Total area of the live triangles.
+/// Total area of the live triangles, bit-identical for any thread count ([`ordered_sum`]).
 pub fn total_area(mesh: &LabeledMesh) -> f64 {
     let alive = mesh.tri_alive_flags();
-    (0..mesh.triangle_capacity())
+    ordered_sum(mesh.triangle_capacity(), |t| {
+        if alive[t] {
+            triangle_area(&mesh.tri_positions(TriId::new(t as u32)))
+        } else {
+            0.0
+        }
+    })
+}
+
+/// `f(0) + f(1) + … + f(n − 1)` on rayon, bit-identical for any thread count and from run
+/// to run: fixed runs of [`CHUNK`] indices are summed in index order, then the run sums in
+/// run order.
+///
+/// Why not `par_iter().sum()`: rayon associates a float sum along its work-stealing
+/// splits, which depend on the number of threads and on timing, so the last bits of the
+/// result vary. A mean edge length that differs in its last bit moves the split and
+/// collapse thresholds, and a whole run of a tracker then takes different edits. Use this
+/// for every float sum that can reach a decision.
+pub fn ordered_sum(n: usize, f: impl Fn(usize) -> f64 + Sync) -> f64 {
+    let runs: Vec<f64> = (0..n.div_ceil(CHUNK))
         .into_par_iter()
-        .with_min_len(CHUNK)
-        .filter(|&t| alive[t])
-        .map(|t| triangle_area(&mesh.tri_positions(TriId::new(t as u32))))
-        .sum()
+        .map(|r| (r * CHUNK..n.min((r + 1) * CHUNK)).map(&f).sum())
+        .collect();
+    runs.into_iter().sum()
 }
 
 /// Unit right-hand normal of every triangle slot (zero for dead or degenerate ones).
@@ -332,6 +350,32 @@ mod tests {
 
     fn l(i: u32) -> Label {
         Label::new(i)
+    }
+
+    #[test]
+    fn ordered_sum_is_bit_identical_for_any_thread_count() {
+        // Terms of very different magnitudes, so that any change of association changes
+        // the last bits; a plain rayon sum fails the reference comparison below.
+        let f = |i: usize| {
+            ((i * 7919) % 1000) as f64 * 1e-3 + if i.is_multiple_of(97) { 1e9 } else { 0.0 }
+        };
+        let n = 5 * CHUNK + 7;
+        let reference: f64 = (0..n)
+            .collect::<Vec<_>>()
+            .chunks(CHUNK)
+            .map(|c| c.iter().map(|&i| f(i)).sum::<f64>())
+            .sum();
+        for threads in [1, 2, 3, 4] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            for _ in 0..3 {
+                let got = pool.install(|| ordered_sum(n, f));
+                assert_eq!(got.to_bits(), reference.to_bits(), "{threads} threads");
+            }
+        }
+        assert_eq!(ordered_sum(0, f), 0.0);
     }
 
     /// Unit right tetrahedron, every right-hand normal pointing outwards; front = 0

@@ -372,13 +372,14 @@ impl StaticIntersectionGuard {
             })
             .collect();
         let live = mesh.num_triangles().max(1) as f64;
-        let mean_extent = boxes
-            .par_iter()
-            .filter(|b| !b.is_empty())
-            .map(|b| (b.max - b.min).max_element())
-            .filter(|e| e.is_finite())
-            .sum::<f64>()
-            / live;
+        let mean_extent = crate::geometry::ordered_sum(boxes.len(), |i| {
+            let e = (boxes[i].max - boxes[i].min).max_element();
+            if !boxes[i].is_empty() && e.is_finite() {
+                e
+            } else {
+                0.0
+            }
+        }) / live;
         self.dirty.reset(mean_extent);
         let slack = SLACK * mean_extent;
         if slack.is_finite() && slack > 0.0 {

@@ -539,7 +539,7 @@ fn mean_length(edges: &[EdgeItem]) -> f64 {
     if edges.is_empty() {
         return 0.0;
     }
-    edges.par_iter().map(|e| e.length).sum::<f64>() / edges.len() as f64
+    crate::geometry::ordered_sum(edges.len(), |i| edges[i].length) / edges.len() as f64
 }
 
 /// Fraction of the distinct edges of `mesh` whose length lies in `[lo, hi]`, with the
