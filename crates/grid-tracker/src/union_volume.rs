@@ -27,6 +27,10 @@ use rayon::prelude::*;
 /// Lines cast by [`union_volume`] (about; the lattice follows the box's aspect ratio).
 pub const UNION_LINES: usize = 1 << 17;
 
+/// Lines per bin along the second lattice axis: small enough that a line tests few
+/// triangles it cannot meet, large enough that a triangle lands in few bins.
+const BLOCK: usize = 8;
+
 /// What [`union_volume`] measured.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct UnionVolume {
@@ -68,20 +72,27 @@ pub fn union_volume(mesh: &LabeledMesh) -> Option<UnionVolume> {
     let (nb, nc) = ((eb / h).ceil() as usize, (ec / h).ceil() as usize);
     let line_at =
         |i: usize, j: usize| DVec2::new(lo[b] + (i as f64 + 0.5) * h, lo[c] + (j as f64 + 0.5) * h);
-    // Triangles binned by the rows (lines with one index along `b`) their projection may
-    // meet, one row of slack each way.
-    let mut rows: Vec<Vec<u32>> = vec![Vec::new(); nb];
-    let row_of = |x: f64| ((x - lo[b]) / h - 0.5).clamp(0.0, (nb - 1) as f64);
+    // Triangles binned by the blocks of lines (one row along `b`, BLOCK lines along `c`)
+    // their projection may meet, one line of slack each way.
+    let nblk = nc.div_ceil(BLOCK);
+    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); nb * nblk];
+    let index = |x: f64, o: f64, n: usize| ((x - o) / h - 0.5).clamp(0.0, (n - 1) as f64);
     let labels = mesh.label_pairs();
     for t in mesh.triangles() {
         let p = mesh.tri_positions(t);
         let (mn, mx) = (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
         let (i0, i1) = (
-            row_of(mn[b]).floor() as usize,
-            row_of(mx[b]).ceil() as usize,
+            index(mn[b], lo[b], nb).floor() as usize,
+            index(mx[b], lo[b], nb).ceil() as usize,
         );
-        for row in &mut rows[i0..=i1] {
-            row.push(t.raw());
+        let (k0, k1) = (
+            index(mn[c], lo[c], nc).floor() as usize / BLOCK,
+            index(mx[c], lo[c], nc).ceil() as usize / BLOCK,
+        );
+        for i in i0..=i1 {
+            for bin in &mut bins[i * nblk + k0..=i * nblk + k1] {
+                bin.push(t.raw());
+            }
         }
     }
     let outside = Label::OUTSIDE;
@@ -92,7 +103,7 @@ pub fn union_volume(mesh: &LabeledMesh) -> Option<UnionVolume> {
             for j in 0..nc {
                 let q = line_at(i, j);
                 hits.clear();
-                for &t in &rows[i] {
+                for &t in &bins[i * nblk + j / BLOCK] {
                     let t = mesh_core::TriId::new(t);
                     let Some(x) = cross_axis_line_triangle(axis, q, mesh.tri_positions(t)) else {
                         continue;
