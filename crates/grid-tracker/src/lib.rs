@@ -66,7 +66,7 @@ pub use params::{GridParams, ImproveScope, SubcellPass};
 pub use pipeline::{PassStats, PipelineError};
 pub use scale::{
     CELLS_PER_THICKNESS, CellSizeChoice, CellSizeRule, MAX_SURFACE_CELLS, default_cell_size,
-    thinnest_shell,
+    thinnest_shell, tracker_cell_size,
 };
 pub use tracker::GridTracker;
 pub use union_volume::{UNION_LINES, UnionVolume, union_volume};

@@ -139,6 +139,25 @@ pub fn default_cell_size(mesh: &LabeledMesh) -> CellSizeChoice {
     }
 }
 
+/// The tracker's default ℓ: the mean edge length, recorded with the thinnest material for
+/// comparison. The tracker does not follow [`default_cell_size`]: ℓ is also its
+/// improvement's target edge length (0.5–1.5 ℓ over the whole mesh), so a smaller ℓ would
+/// refine every coarse scene's whole surface each step; its flaw stage keeps materials
+/// coarser than ℓ instead (see `stages::flaws::edges::deep_edges`).
+pub fn tracker_cell_size(mesh: &LabeledMesh) -> CellSizeChoice {
+    let mean = mean_edge_length(mesh);
+    let thinnest = thinnest_shell(mesh);
+    let thin = thinnest.map_or("no bounded material".to_string(), |(l, t)| {
+        format!("thinnest material {l}: 3V/A = {t:.4}")
+    });
+    CellSizeChoice {
+        cell_size: mean,
+        rule: CellSizeRule::MeanEdgeLength,
+        thinnest,
+        reason: format!("ℓ = mean edge length {mean:.4} (the tracker's default); {thin}"),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use glam::DVec3;

@@ -40,7 +40,7 @@ use mesh_core::{
 
 use crate::params::GridParams;
 use crate::pipeline::{PassStats, PipelineError, Timings, improve_mesh, run_pass};
-use crate::scale::{CellSizeChoice, default_cell_size};
+use crate::scale::{CellSizeChoice, tracker_cell_size};
 
 /// The grid tracker (Heiss-Synak et al. 2024): lets the mesh tangle, then repairs the
 /// flawed regions from a multi-material implicit surface on a sparse background grid,
@@ -101,9 +101,8 @@ fn move_vertices(mesh: &mut LabeledMesh, proposed: &[DVec3]) -> Vec<TriId> {
 impl GridTracker {
     /// A tracker for `mesh`, which must be valid (layers 1–3 of
     /// [`mesh_core::validate`]: closed, consistently labelled, finite, no zero-area
-    /// triangle) and non-empty. ℓ is [`GridParams::cell_size`] or, without one,
-    /// [`default_cell_size`]: the mean edge length, or less where a material is thinner
-    /// (see [`Self::cell_size_choice`]).
+    /// triangle) and non-empty. ℓ is [`GridParams::cell_size`] or, without one, the mean
+    /// edge length ([`crate::tracker_cell_size`], see [`Self::cell_size_choice`]).
     pub fn new(mesh: LabeledMesh, params: GridParams) -> Result<Self, TrackError> {
         params.check().map_err(TrackError::InvalidInput)?;
         if mesh.num_triangles() == 0 {
@@ -112,7 +111,7 @@ impl GridTracker {
         check_input(&mesh).map_err(TrackError::InvalidInput)?;
         let choice = match params.cell_size {
             Some(l) => CellSizeChoice::given(l),
-            None => default_cell_size(&mesh),
+            None => tracker_cell_size(&mesh),
         };
         let cell_size = choice.cell_size;
         if !(cell_size.is_finite() && cell_size > 0.0) {
