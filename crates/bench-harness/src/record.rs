@@ -214,6 +214,10 @@ pub struct StepRecord {
     pub substeps: u32,
     /// The mesh after the step passed `validate()`.
     pub valid: bool,
+    /// Materials that vanished in this step ([`TopologyEvents::vanished`]); absent from
+    /// the JSON when none did.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub vanished: Vec<u32>,
 }
 
 impl StepRecord {
@@ -237,6 +241,7 @@ impl StepRecord {
             events: EventCounts::from(&report.events),
             substeps: report.substeps,
             valid: true,
+            vanished: report.events.vanished.iter().map(|l| l.raw()).collect(),
         }
     }
 }

@@ -5,28 +5,64 @@
 //! grid finds flawed is cut out and rebuilt, every exact intersection finer than ℓ is found
 //! by one test over the whole mesh and repaired the same way, and everything else is kept
 //! as it was. Improvement (§8.5) is restricted to the triangles the pass created
-//! ([`crate::ImproveScope::Changed`]), so a clean input comes out with every triangle
-//! untouched.
+//! ([`crate::ImproveScope::Changed`]).
+//!
+//! What a user of a repair tool can rely on:
+//! - **clean input is returned unchanged** (byte-identical `to_raw()`), at any ℓ: an
+//!   input that passes all four layers of [`mesh_core::validate`] needs no repair, so the
+//!   pipeline does not run;
+//! - **ℓ fits the input** when none is given ([`default_cell_size`]);
+//! - **no material is lost silently**: every label's volume before and after is in the
+//!   report, and a vanished label, or an output whose total volume differs from the
+//!   union of the input's materials ([`union_volume`], measured independently of the
+//!   pipeline) by more than [`FixOptions::volume_tolerance`], is a [`FixError::Loss`]
+//!   unless [`FixOptions::allow_loss`] turns it into a warning;
+//! - **[`crate::GridParams::time_budget`] holds through every stage**, improvement (whose
+//!   edits stop at the deadline) and validation included: the call returns within the
+//!   budget plus one stage other than improvement.
+//!
+//! What rebuilt regions cannot keep: the rebuild (§8.1–8.3) is multi-material marching
+//! cubes with vertices on grid edges, faces and cell centres, so inside flawed cells a
+//! flat face is kept only where it coincides with grid-edge crossings and a crease (an
+//! input edge, or the intersection curve of two overlapping flat faces) is cut by a
+//! chamfer of size up to ℓ; the curve smoothing of §8.3 rounds it further. Flat faces and
+//! creases outside the flawed cells are untouched (the input's own triangles), and a finer
+//! ℓ shrinks what is rebuilt.
+
+use std::time::Instant;
 
 use glam::IVec3;
-use mesh_core::remesh::{VertexAttributes, improve::mean_edge_length};
+use mesh_core::remesh::VertexAttributes;
 use mesh_core::validate::{ValidateOptions, ValidationReport, validate};
-use mesh_core::{LabeledMesh, StageTiming, TriId};
+use mesh_core::{Label, LabelVolume, LabeledMesh, MaterialCensus, StageTiming, TriId};
 
 use crate::params::{GridParams, ImproveScope};
 use crate::pipeline::{PassStats, PipelineError, Timings, improve_mesh, run_pass};
+use crate::scale::{CellSizeChoice, default_cell_size};
 use crate::stages::grid::Lattice;
+use crate::union_volume::union_volume;
 
 /// Options of [`fix_with`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct FixOptions {
     /// The pipeline's parameters. Default: [`GridParams::default`] with improvement
-    /// restricted to the rebuilt parts ([`ImproveScope::Changed`]).
+    /// restricted to the rebuilt parts ([`ImproveScope::Changed`]). Without
+    /// [`GridParams::cell_size`], ℓ is [`default_cell_size`].
     pub params: GridParams,
     /// Also check the output for exact self-intersections (layer 4 of
     /// [`mesh_core::validate`]) for the report. Default true: a one-shot repair can afford
     /// it, and it is the figure a user of `fix` wants.
     pub validate_intersections: bool,
+    /// Accept a loss (a vanished material, or a total volume off the union's by more than
+    /// [`Self::volume_tolerance`]): the result is returned with the loss in
+    /// [`FixReport::warnings`] (and a `tracing` warning) instead of [`FixError::Loss`].
+    /// Default false.
+    pub allow_loss: bool,
+    /// Largest accepted relative difference between the output's total enclosed volume
+    /// and the union reference ([`FixReport::volume_check`]). Default 0.02: the rebuild
+    /// chamfers creases by up to ℓ and the reference's quadrature is good to a few 0.1 %
+    /// (see [`union_volume`]), far below the loss of a material.
+    pub volume_tolerance: f64,
 }
 
 impl Default for FixOptions {
@@ -37,8 +73,38 @@ impl Default for FixOptions {
                 ..GridParams::default()
             },
             validate_intersections: true,
+            allow_loss: false,
+            volume_tolerance: 0.02,
         }
     }
+}
+
+/// How the union volume the output is checked against was measured.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ReferenceMethod {
+    /// The input was clean: its materials do not overlap, so the sum of their
+    /// divergence-theorem volumes is the union's, exactly.
+    CleanInput,
+    /// Exact line crossings integrated over a lattice of lines ([`union_volume`]).
+    LineIntegral,
+}
+
+/// The total-volume check of [`fix_with`].
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct VolumeCheck {
+    /// Enclosed volume of the union of the input's materials (labels ≠ 0).
+    pub reference: f64,
+    /// How it was measured.
+    pub method: ReferenceMethod,
+    /// Line spacing of [`ReferenceMethod::LineIntegral`] (0 otherwise).
+    pub spacing: f64,
+    /// Sum of the output's per-label volumes (labels ≠ 0).
+    pub output: f64,
+    /// `|output − reference| / reference` (0 when both are 0).
+    pub relative_change: f64,
+    /// [`FixOptions::volume_tolerance`].
+    pub tolerance: f64,
 }
 
 /// What [`fix_with`] did (the CLI's `surftrack fix --json` record).
@@ -48,6 +114,10 @@ pub struct FixReport {
     pub stages: Vec<StageTiming>,
     /// The cell size ℓ used.
     pub cell_size: f64,
+    /// How ℓ was chosen, and why.
+    pub cell_size_choice: CellSizeChoice,
+    /// The input was clean (all four validation layers) and is returned unchanged.
+    pub clean_input: bool,
     /// Live triangles of the input.
     pub triangles_in: usize,
     /// Live triangles of the output.
@@ -65,6 +135,16 @@ pub struct FixReport {
     pub subcell_pairs: usize,
     /// Edits of the local improvement.
     pub improve_edits: usize,
+    /// Per material (label ≠ 0): the input's divergence-theorem volume (on an overlapping
+    /// input, overlaps count once per material covering them) and the output's volume.
+    pub volumes: Vec<LabelVolume>,
+    /// Materials of the input with no volume in the output.
+    pub vanished: Vec<Label>,
+    /// The output's total volume against the union of the input's materials.
+    pub volume_check: VolumeCheck,
+    /// Losses accepted with [`FixOptions::allow_loss`] (empty otherwise: a loss is an
+    /// error).
+    pub warnings: Vec<String>,
     /// Validation of the output (layers 1–3, and 4 with
     /// [`FixOptions::validate_intersections`]).
     pub validation: ValidationReport,
@@ -84,8 +164,52 @@ pub struct FixOutcome {
     /// Lattice coordinates of the final flawed region's cells, on [`Self::lattice`]:
     /// every changed input triangle meets one of them (cut triangles cross its boundary).
     pub flawed_cells: Vec<IVec3>,
-    /// The grid lattice of the pass.
-    pub lattice: Lattice,
+    /// The grid lattice of the pass (`None` for a clean input: no pass ran).
+    pub lattice: Option<Lattice>,
+}
+
+/// What a repair would lose: the materials that vanished and the volumes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MaterialLoss {
+    /// ℓ of the repair.
+    pub cell_size: f64,
+    /// Vanished materials with their input volumes.
+    pub vanished: Vec<LabelVolume>,
+    /// The total-volume check.
+    pub volume: VolumeCheck,
+}
+
+impl std::fmt::Display for MaterialLoss {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let mut parts: Vec<String> = self
+            .vanished
+            .iter()
+            .map(|v| {
+                format!(
+                    "material {} vanished (volume {:.6} in the input, {:.6} in the output)",
+                    v.label.raw(),
+                    v.before,
+                    v.after
+                )
+            })
+            .collect();
+        let c = &self.volume;
+        if c.relative_change > c.tolerance {
+            parts.push(format!(
+                "total volume {:.6} against {:.6} for the union of the input's materials                  ({:+.2} %, tolerance {:.2} %)",
+                c.output,
+                c.reference,
+                100.0 * (c.output - c.reference) / c.reference.abs().max(f64::MIN_POSITIVE),
+                100.0 * c.tolerance
+            ));
+        }
+        write!(
+            f,
+            "{} at ℓ = {:.4}; a finer cell size (--cell) may keep it",
+            parts.join("; "),
+            self.cell_size
+        )
+    }
 }
 
 /// Why a repair failed.
@@ -103,9 +227,12 @@ pub enum FixError {
     /// The result failed validation (a bug: the safety net should have caught it).
     #[error("the repaired mesh is invalid: {0}")]
     InvalidOutput(String),
+    /// The repair would lose a material or volume (see [`FixOptions::allow_loss`]).
+    #[error("the repair loses material: {0}")]
+    Loss(Box<MaterialLoss>),
 }
 
-/// Repairs `mesh` with cell size `cell_size` (`None`: the mean edge length) and the
+/// Repairs `mesh` with cell size `cell_size` (`None`: [`default_cell_size`]) and the
 /// default options: a clean, consistently labelled mesh whose overlaps became interfaces
 /// (different labels) or merged volumes (equal labels).
 pub fn fix(mesh: &LabeledMesh, cell_size: Option<f64>) -> Result<LabeledMesh, FixError> {
@@ -118,8 +245,8 @@ pub fn fix(mesh: &LabeledMesh, cell_size: Option<f64>) -> Result<LabeledMesh, Fi
 /// Checks what the pipeline needs and cannot repair: topology (closed, no dangling,
 /// degenerate or duplicate triangle, a sound corner table), a front ≠ back label on every
 /// triangle, finite coordinates. Inconsistent wedges and zero-area triangles are defects
-/// the pass repairs, so they are allowed here.
-fn check_fix_input(mesh: &LabeledMesh) -> Result<(), FixError> {
+/// the pass repairs, so they are allowed here. Returns the report of layers 1–3.
+fn check_fix_input(mesh: &LabeledMesh) -> Result<ValidationReport, FixError> {
     let r = validate(mesh, &ValidateOptions::default());
     let fatal = !(r.dangling_references.is_empty()
         && r.degenerate.is_empty()
@@ -134,24 +261,60 @@ fn check_fix_input(mesh: &LabeledMesh) -> Result<(), FixError> {
     if mesh.num_triangles() == 0 {
         return Err(FixError::InvalidInput("the mesh has no triangles".into()));
     }
-    Ok(())
+    Ok(r)
+}
+
+/// Sum of the volumes of the bounded materials (labels ≠ 0).
+fn bounded_total(census: &MaterialCensus) -> f64 {
+    census
+        .volumes
+        .iter()
+        .filter(|(l, _)| **l != Label::OUTSIDE)
+        .map(|(_, v)| *v)
+        .sum()
 }
 
 /// [`fix`] with every option, returning the report too.
 pub fn fix_with(mesh: &LabeledMesh, options: &FixOptions) -> Result<FixOutcome, FixError> {
     let params = &options.params;
     params.check().map_err(FixError::BadParams)?;
-    check_fix_input(mesh)?;
-    let cell_size = match params.cell_size {
-        Some(l) => l,
-        None => mean_edge_length(mesh),
-    };
-    if !(cell_size.is_finite() && cell_size > 0.0) {
+    if !(options.volume_tolerance.is_finite() && options.volume_tolerance >= 0.0) {
         return Err(FixError::BadParams(format!(
-            "cell size ℓ = {cell_size} must be finite and > 0"
+            "volume_tolerance = {} must be finite and ≥ 0",
+            options.volume_tolerance
         )));
     }
+    let started = Instant::now();
+    let deadline = params.time_budget.map(|b| started + b);
     let mut timings = Timings::default();
+    let input_report = timings.time("validate", || check_fix_input(mesh))?;
+    let choice = match params.cell_size {
+        Some(l) => CellSizeChoice::given(l),
+        None => timings.time("scale", || default_cell_size(mesh)),
+    };
+    let cell_size = choice.cell_size;
+    if !(cell_size.is_finite() && cell_size > 0.0) {
+        return Err(FixError::BadParams(format!(
+            "cell size ℓ = {cell_size} must be finite and > 0 ({})",
+            choice.reason
+        )));
+    }
+    let before = timings.time("volumes", || MaterialCensus::of(mesh));
+    timings.check_budget(params.time_budget, "volumes")?;
+
+    // A clean input needs no repair: returned as it is, whatever ℓ.
+    if input_report.is_valid() {
+        let full = timings.time("validate", || {
+            validate(mesh, &ValidateOptions::with_intersections())
+        });
+        timings.check_budget(params.time_budget, "validate")?;
+        if full.is_valid() {
+            return Ok(clean_outcome(mesh, options, choice, before, full, timings));
+        }
+    }
+
+    let reference = timings.time("reference", || union_volume(mesh));
+    timings.check_budget(params.time_budget, "reference")?;
     let pass = run_pass(
         mesh.clone(),
         &VertexAttributes::none(),
@@ -174,6 +337,7 @@ pub fn fix_with(mesh: &LabeledMesh, options: &FixOptions) -> Result<FixOutcome, 
                 ip,
                 cell_size,
                 &pass.created,
+                deadline,
             )
         });
         if let Some(r) = r {
@@ -184,6 +348,7 @@ pub fn fix_with(mesh: &LabeledMesh, options: &FixOptions) -> Result<FixOutcome, 
                 + r.separations
                 + r.pinched;
         }
+        timings.check_budget(params.time_budget, "improve")?;
     }
     let changed_input: Vec<TriId> = mesh
         .triangles()
@@ -200,6 +365,7 @@ pub fn fix_with(mesh: &LabeledMesh, options: &FixOptions) -> Result<FixOutcome, 
             },
         )
     });
+    timings.check_budget(params.time_budget, "validate")?;
     let layers_1_to_3_ok = validation.dangling_references.is_empty()
         && validation.degenerate.is_empty()
         && validation.duplicates.is_empty()
@@ -212,10 +378,47 @@ pub fn fix_with(mesh: &LabeledMesh, options: &FixOptions) -> Result<FixOutcome, 
     if !layers_1_to_3_ok {
         return Err(FixError::InvalidOutput(validation.to_string()));
     }
+    let after = timings.time("volumes", || MaterialCensus::of(&out));
+    let output = bounded_total(&after);
+    let (reference, method, spacing) = match reference {
+        Some(r) => (r.volume, ReferenceMethod::LineIntegral, r.spacing),
+        // No extent in two axes: nothing is enclosed.
+        None => (0.0, ReferenceMethod::LineIntegral, 0.0),
+    };
+    let volume_check = VolumeCheck {
+        reference,
+        method,
+        spacing,
+        output,
+        relative_change: relative_change(output, reference),
+        tolerance: options.volume_tolerance,
+    };
+    let volumes = before.volumes_to(&after);
+    // A material of the input with a bounded volume there and none left.
+    let vanished: Vec<LabelVolume> = volumes
+        .iter()
+        .filter(|v| v.before > 0.0 && v.after <= 0.0)
+        .copied()
+        .collect();
+    let mut warnings = Vec::new();
+    if !vanished.is_empty() || volume_check.relative_change > volume_check.tolerance {
+        let loss = MaterialLoss {
+            cell_size,
+            vanished: vanished.clone(),
+            volume: volume_check.clone(),
+        };
+        if !options.allow_loss {
+            return Err(FixError::Loss(Box::new(loss)));
+        }
+        tracing::warn!("fix: accepted loss: {loss}");
+        warnings.push(format!("accepted loss: {loss}"));
+    }
     let triangles_in = mesh.num_triangles();
     let report = FixReport {
         stages: timings.into_stages(),
         cell_size,
+        cell_size_choice: choice,
+        clean_input: false,
         triangles_in,
         triangles_out: out.num_triangles(),
         untouched_fraction: untouched as f64 / triangles_in.max(1) as f64,
@@ -224,6 +427,10 @@ pub fn fix_with(mesh: &LabeledMesh, options: &FixOptions) -> Result<FixOutcome, 
         subcell_rounds: stats.subcell_rounds,
         subcell_pairs: stats.subcell_pairs,
         improve_edits,
+        volumes,
+        vanished: vanished.iter().map(|v| v.label).collect(),
+        volume_check,
+        warnings,
         validation,
     };
     Ok(FixOutcome {
@@ -231,8 +438,69 @@ pub fn fix_with(mesh: &LabeledMesh, options: &FixOptions) -> Result<FixOutcome, 
         report,
         changed_input,
         flawed_cells: pass.region_cells,
-        lattice: pass.lattice,
+        lattice: Some(pass.lattice),
     })
+}
+
+/// `|output − reference| / |reference|`, 0 when both vanish, infinite when only the
+/// reference does.
+fn relative_change(output: f64, reference: f64) -> f64 {
+    let d = (output - reference).abs();
+    if d == 0.0 {
+        0.0
+    } else if reference == 0.0 {
+        f64::INFINITY
+    } else {
+        d / reference.abs()
+    }
+}
+
+/// The outcome for a clean input: the input itself, every volume unchanged.
+fn clean_outcome(
+    mesh: &LabeledMesh,
+    options: &FixOptions,
+    choice: CellSizeChoice,
+    census: MaterialCensus,
+    validation: ValidationReport,
+    timings: Timings,
+) -> FixOutcome {
+    let mut out = mesh.clone();
+    out.compact();
+    let total = bounded_total(&census);
+    let n = mesh.num_triangles();
+    let report = FixReport {
+        stages: timings.into_stages(),
+        cell_size: choice.cell_size,
+        cell_size_choice: choice,
+        clean_input: true,
+        triangles_in: n,
+        triangles_out: n,
+        untouched_fraction: 1.0,
+        flawed_cells: 0,
+        safety_rounds: 0,
+        subcell_rounds: 0,
+        subcell_pairs: 0,
+        improve_edits: 0,
+        volumes: census.volumes_to(&census),
+        vanished: Vec::new(),
+        volume_check: VolumeCheck {
+            reference: total,
+            method: ReferenceMethod::CleanInput,
+            spacing: 0.0,
+            output: total,
+            relative_change: 0.0,
+            tolerance: options.volume_tolerance,
+        },
+        warnings: Vec::new(),
+        validation,
+    };
+    FixOutcome {
+        mesh: out,
+        report,
+        changed_input: Vec::new(),
+        flawed_cells: Vec::new(),
+        lattice: None,
+    }
 }
 
 /// Whether input triangle `t` is in `out` at the same slot with the same corner positions

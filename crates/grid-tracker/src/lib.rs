@@ -53,13 +53,23 @@ mod fix;
 mod params;
 mod pipeline;
 mod safety;
+mod scale;
 pub mod stages;
 mod tracker;
+mod union_volume;
 
-pub use fix::{FixError, FixOptions, FixOutcome, FixReport, fix, fix_with};
+pub use fix::{
+    FixError, FixOptions, FixOutcome, FixReport, MaterialLoss, ReferenceMethod, VolumeCheck, fix,
+    fix_with,
+};
 pub use params::{GridParams, ImproveScope, SubcellPass};
 pub use pipeline::{PassStats, PipelineError};
+pub use scale::{
+    CELLS_PER_THICKNESS, CellSizeChoice, CellSizeRule, MAX_SURFACE_CELLS, default_cell_size,
+    thinnest_shell, tracker_cell_size,
+};
 pub use tracker::GridTracker;
+pub use union_volume::{UNION_LINES, UnionVolume, union_volume};
 
 pub use stages::cut::{Cut, CutError, CutOptions, CutStats, cut_mesh};
 pub use stages::flaws::{

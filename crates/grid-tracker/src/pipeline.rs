@@ -571,11 +571,34 @@ impl EditGuard for LocalGuard<'_> {
     }
 }
 
+/// Vetoes every edit once `deadline` has passed: improvement's sweeps are bounded in
+/// number but not in time, and its edits are the only place it can be stopped from
+/// outside without leaving a half-done edit.
+struct DeadlineGuard<'g> {
+    inner: &'g mut dyn EditGuard,
+    deadline: Instant,
+}
+
+impl EditGuard for DeadlineGuard<'_> {
+    fn check(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), &'static str> {
+        if Instant::now() >= self.deadline {
+            return Err("the time budget is spent");
+        }
+        self.inner.check(mesh, edit)
+    }
+
+    fn committed(&mut self, mesh: &LabeledMesh, edit: &Edit, applied: &Applied) {
+        self.inner.committed(mesh, edit, applied);
+    }
+}
+
 /// §8.5: mesh improvement with edge lengths in `[min, max] × ℓ` (the target is forced to
 /// ℓ), over the whole mesh or only the `created` triangles. When the sub-ℓ pass is on,
 /// every edit is checked exactly against the rest of the mesh
 /// ([`StaticIntersectionGuard`]), so improvement keeps an intersection-free mesh so.
 /// Returns `None` when there was nothing to improve (local scope, nothing created).
+/// With a `deadline`, every edit after it is vetoed ([`DeadlineGuard`]), so improvement
+/// ends within one edit check of a time budget.
 pub(crate) fn improve_mesh(
     mesh: &mut LabeledMesh,
     attrs: &mut VertexAttributes,
@@ -583,6 +606,7 @@ pub(crate) fn improve_mesh(
     improve_params: &ImproveParams,
     cell_size: f64,
     created: &[TriId],
+    deadline: Option<Instant>,
 ) -> Option<ImproveReport> {
     let improve_params = ImproveParams {
         target_edge_length: Some(cell_size),
@@ -594,6 +618,14 @@ pub(crate) fn improve_mesh(
         &mut none
     } else {
         &mut exact
+    };
+    let mut timed;
+    let inner: &mut dyn EditGuard = match deadline {
+        Some(deadline) => {
+            timed = DeadlineGuard { inner, deadline };
+            &mut timed
+        }
+        None => inner,
     };
     match params.improve_scope {
         ImproveScope::Whole => Some(improve(mesh, &improve_params, attrs, inner)),

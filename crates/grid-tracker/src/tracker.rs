@@ -30,15 +30,16 @@
 use std::time::Instant;
 
 use glam::DVec3;
-use mesh_core::remesh::{VertexAttributes, improve::mean_edge_length};
+use mesh_core::remesh::VertexAttributes;
 use mesh_core::validate::{ValidateOptions, validate};
 use mesh_core::{
-    LabeledMesh, RegionCensus, StepReport, SurfaceTracker, TopologyEvents, TrackError, TriId,
-    check_proposal,
+    LabeledMesh, MaterialCensus, RegionCensus, StepReport, SurfaceTracker, TopologyEvents,
+    TrackError, TriId, check_proposal,
 };
 
 use crate::params::GridParams;
 use crate::pipeline::{PassStats, PipelineError, Timings, improve_mesh, run_pass};
+use crate::scale::{CellSizeChoice, tracker_cell_size};
 
 /// The grid tracker (Heiss-Synak et al. 2024): lets the mesh tangle, then repairs the
 /// flawed regions from a multi-material implicit surface on a sparse background grid,
@@ -55,9 +56,14 @@ pub struct GridTracker {
     attrs: VertexAttributes,
     params: GridParams,
     cell_size: f64,
+    /// How ℓ was chosen.
+    choice: CellSizeChoice,
     step: u64,
     /// Regions of the current mesh, to count merges and splits.
     census: RegionCensus,
+    /// Volume per material of the current mesh, for [`StepReport::volumes`] and
+    /// [`TopologyEvents::vanished`].
+    materials: MaterialCensus,
     last: Option<PassStats>,
 }
 
@@ -94,30 +100,36 @@ fn move_vertices(mesh: &mut LabeledMesh, proposed: &[DVec3]) -> Vec<TriId> {
 impl GridTracker {
     /// A tracker for `mesh`, which must be valid (layers 1–3 of
     /// [`mesh_core::validate`]: closed, consistently labelled, finite, no zero-area
-    /// triangle) and non-empty. ℓ is [`GridParams::cell_size`] or the mean edge length.
+    /// triangle) and non-empty. ℓ is [`GridParams::cell_size`] or, without one, the mean
+    /// edge length ([`crate::tracker_cell_size`], see [`Self::cell_size_choice`]).
     pub fn new(mesh: LabeledMesh, params: GridParams) -> Result<Self, TrackError> {
         params.check().map_err(TrackError::InvalidInput)?;
         if mesh.num_triangles() == 0 {
             return Err(TrackError::InvalidInput("the mesh has no triangles".into()));
         }
         check_input(&mesh).map_err(TrackError::InvalidInput)?;
-        let cell_size = match params.cell_size {
-            Some(l) => l,
-            None => mean_edge_length(&mesh),
+        let choice = match params.cell_size {
+            Some(l) => CellSizeChoice::given(l),
+            None => tracker_cell_size(&mesh),
         };
+        let cell_size = choice.cell_size;
         if !(cell_size.is_finite() && cell_size > 0.0) {
             return Err(TrackError::InvalidInput(format!(
-                "cell size ℓ = {cell_size} (mean edge length) must be finite and > 0"
+                "cell size ℓ = {cell_size} must be finite and > 0 ({})",
+                choice.reason
             )));
         }
         let census = RegionCensus::of(&mesh);
+        let materials = MaterialCensus::of(&mesh);
         Ok(Self {
             mesh,
             attrs: VertexAttributes::none(),
             params,
             cell_size,
+            choice,
             step: 0,
             census,
+            materials,
             last: None,
         })
     }
@@ -147,6 +159,11 @@ impl GridTracker {
     /// The cell size ℓ in use.
     pub fn cell_size(&self) -> f64 {
         self.cell_size
+    }
+
+    /// ℓ and why it was chosen (given, the mean edge length, or the thinnest material).
+    pub fn cell_size_choice(&self) -> &CellSizeChoice {
+        &self.choice
     }
 
     /// Steps completed.
@@ -195,6 +212,7 @@ impl GridTracker {
                     ip,
                     self.cell_size,
                     &pass.created,
+                    None,
                 )
             });
             if let Some(r) = report {
@@ -271,17 +289,25 @@ impl SurfaceTracker for GridTracker {
         let start = Instant::now();
         compact(&mut mesh, &mut attrs);
         let census = RegionCensus::of(&mesh);
+        let materials = MaterialCensus::of(&mesh);
         timings.add("commit", start.elapsed());
         let (merges, splits) = census.events_since(&self.census);
+        let vanished = self.materials.vanished_in(&materials);
+        if !vanished.is_empty() {
+            tracing::warn!("step {}: materials {vanished:?} vanished", self.step + 1);
+        }
         let events = TopologyEvents {
             merges,
             splits,
             remeshing_edits: edits,
+            vanished,
             ..TopologyEvents::default()
         };
+        let volumes = self.materials.volumes_to(&materials);
         self.mesh = mesh;
         self.attrs = attrs;
         self.census = census;
+        self.materials = materials;
         self.step += 1;
         self.last = Some(stats);
         Ok(StepReport {
@@ -290,6 +316,7 @@ impl SurfaceTracker for GridTracker {
             vertices: self.mesh.num_vertices(),
             triangles: self.mesh.num_triangles(),
             substeps: 1,
+            volumes,
         })
     }
 

@@ -118,7 +118,15 @@ fn noise_tangled_double_bubble_comes_out_clean() {
         .self_intersecting_pairs
         .map_or(0, |p| p.count);
     assert!(pairs > 20, "the noise must tangle the mesh ({pairs} pairs)");
-    let out = fix_report(&tangled, &FixOptions::default());
+    // At ℓ = the mean edge length the folds are cut off with ~8 % of the volume the
+    // tangled surface's union encloses: reported, accepted here (this test is about
+    // validity).
+    let options = FixOptions {
+        allow_loss: true,
+        ..FixOptions::default()
+    };
+    let out = fix_report(&tangled, &options);
+    assert!(out.report.vanished.is_empty());
     assert_clean(&out.mesh, "tangled double bubble");
     assert_eq!(
         out.report
@@ -162,7 +170,7 @@ fn a_local_overlap_changes_only_triangles_in_flawed_cells() {
         let p = m.tri_positions(t);
         let lo = p[0].min(p[1]).min(p[2]);
         let hi = p[0].max(p[1]).max(p[2]);
-        let [a, b] = out.lattice.cell_range(lo, hi);
+        let [a, b] = out.lattice.expect("a pass ran").cell_range(lo, hi);
         let meets = (a.x..=b.x)
             .any(|x| (a.y..=b.y).any(|y| (a.z..=b.z).any(|z| flawed.contains(&[x, y, z]))));
         assert!(meets, "triangle {t} changed outside the flawed region");
@@ -187,7 +195,12 @@ fn boxes_with_vertices_on_grid_planes_give_valid_output() {
         ("different labels", union(&[a.clone(), b])),
         ("same label", union(&[a, c])),
     ] {
-        let mut options = FixOptions::default();
+        // Validity at a coarse ℓ: the rebuild chamfers the boxes' creases by up to ℓ, an
+        // ~8 % volume change, accepted here and checked in tests/loss.rs.
+        let mut options = FixOptions {
+            allow_loss: true,
+            ..FixOptions::default()
+        };
         options.params.cell_size = Some(0.5);
         options.params.perturbation = 0.0;
         let out = fix_report(&m, &options);

@@ -37,5 +37,6 @@ pub use ids::{CornerId, Id, IdVec, Label, TriId, VertexId};
 pub use mesh::{Compaction, LabeledMesh};
 pub use regions::{RegionCensus, RegionShell, Regions};
 pub use tracker::{
-    StageTiming, StepReport, SurfaceTracker, TopologyEvents, TrackError, check_proposal,
+    LabelVolume, MaterialCensus, StageTiming, StepReport, SurfaceTracker, TopologyEvents,
+    TrackError, check_proposal,
 };

@@ -10,7 +10,8 @@ use std::time::Duration;
 use glam::DVec3;
 use serde::Serialize;
 
-use crate::ids::VertexId;
+use crate::geometry::label_volumes;
+use crate::ids::{Label, VertexId};
 use crate::mesh::LabeledMesh;
 use crate::remesh::VertexAttributes;
 
@@ -67,6 +68,9 @@ pub struct TopologyEvents {
     pub t2: u64,
     /// Edge splits, flips, collapses and smoothing moves of mesh improvement.
     pub remeshing_edits: u64,
+    /// Materials present before the step and gone after it (no triangle side faces them
+    /// any more), in increasing order: a material a step deletes is never silent.
+    pub vanished: Vec<Label>,
 }
 
 /// What one successful step did.
@@ -82,6 +86,69 @@ pub struct StepReport {
     pub triangles: usize,
     /// Sub-steps taken (time-step halving in the collision backend; 1 otherwise).
     pub substeps: u32,
+    /// Enclosed volume of every bounded material (label ≠ 0) before and after the step,
+    /// by label; empty when the backend does not measure it.
+    pub volumes: Vec<LabelVolume>,
+}
+
+/// The enclosed volume of one material before and after a step or a repair.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct LabelVolume {
+    /// The material.
+    pub label: Label,
+    /// Volume before (0 when the material was absent).
+    pub before: f64,
+    /// Volume after (0 when the material is gone).
+    pub after: f64,
+}
+
+/// Per-material volume and presence of a mesh: what [`LabelVolume`]s and
+/// [`TopologyEvents::vanished`] are computed from, one linear pass per mesh.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MaterialCensus {
+    /// Enclosed volume per label that some live triangle side faces (label 0, the outside,
+    /// included: minus the sum of the others on a closed mesh).
+    pub volumes: std::collections::BTreeMap<Label, f64>,
+}
+
+impl MaterialCensus {
+    /// The census of `mesh`: [`label_volumes`], whose keys are exactly the labels some
+    /// live triangle side carries.
+    pub fn of(mesh: &LabeledMesh) -> Self {
+        Self {
+            volumes: label_volumes(mesh),
+        }
+    }
+
+    /// Bounded materials (label ≠ 0) of `self` (before) and `after`, with both volumes.
+    pub fn volumes_to(&self, after: &MaterialCensus) -> Vec<LabelVolume> {
+        let mut labels: Vec<Label> = self
+            .volumes
+            .keys()
+            .chain(after.volumes.keys())
+            .copied()
+            .filter(|&l| l != Label::OUTSIDE)
+            .collect();
+        labels.sort_unstable();
+        labels.dedup();
+        labels
+            .into_iter()
+            .map(|label| LabelVolume {
+                label,
+                before: self.volumes.get(&label).copied().unwrap_or(0.0),
+                after: after.volumes.get(&label).copied().unwrap_or(0.0),
+            })
+            .collect()
+    }
+
+    /// Labels present in `self` (before) and absent from `after`, in increasing order.
+    pub fn vanished_in(&self, after: &MaterialCensus) -> Vec<Label> {
+        self.volumes
+            .keys()
+            .filter(|l| !after.volumes.contains_key(l))
+            .copied()
+            .collect()
+    }
 }
 
 impl StepReport {

@@ -33,6 +33,8 @@ pub(super) fn run(args: &FixArgs) -> anyhow::Result<ExitCode> {
     let mut options = FixOptions::default();
     options.params.cell_size = args.cell;
     options.validate_intersections = !args.no_intersection_check;
+    options.allow_loss = args.allow_loss;
+    options.volume_tolerance = args.volume_tolerance;
     let outcome = match fix_with(&mesh, &options) {
         Ok(outcome) => outcome,
         Err(err) => {
@@ -43,6 +45,9 @@ pub(super) fn run(args: &FixArgs) -> anyhow::Result<ExitCode> {
     write_mesh_file(&outcome.mesh, &args.output, args.binary)?;
     let report = &outcome.report;
     let valid = report.validation.is_valid();
+    for w in &report.warnings {
+        eprintln!("warning: {w}");
+    }
     if args.json {
         let record = FixRecord {
             schema: "surftrack.fix/1",
@@ -54,6 +59,23 @@ pub(super) fn run(args: &FixArgs) -> anyhow::Result<ExitCode> {
         println!("{}", serde_json::to_string_pretty(&record)?);
     } else {
         let total: f64 = report.stages.iter().map(|s| s.seconds).sum();
+        let c = &report.volume_check;
+        println!("{}", report.cell_size_choice.reason);
+        for v in &report.volumes {
+            println!(
+                "material {}: volume {:.6} -> {:.6}",
+                v.label.raw(),
+                v.before,
+                v.after
+            );
+        }
+        println!(
+            "total volume {:.6}, union of the input {:.6} ({:.2} % off, tolerance {:.2} %)",
+            c.output,
+            c.reference,
+            100.0 * c.relative_change,
+            100.0 * c.tolerance
+        );
         println!(
             "fixed {} -> {}: {} -> {} triangles, {:.1}% of the input untouched, {} flawed cells (ℓ = {:.4}), {:.2} s",
             args.input.display(),

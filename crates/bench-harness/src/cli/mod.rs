@@ -87,8 +87,12 @@ pub enum Command {
     /// mesh, each with its own label); the output is watertight, consistently labelled and
     /// free of self-intersections. Only triangles in flawed grid cells change.
     ///
-    /// Exit code 0 when the output is valid, 1 when the repair failed, 2 when the input
-    /// cannot be read.
+    /// A clean input (valid, no self-intersections) is written back unchanged. A repair
+    /// that would lose a material, or change the total volume beyond --volume-tolerance
+    /// against the union of the input's materials, fails unless --allow-loss.
+    ///
+    /// Exit code 0 when the output is valid, 1 when the repair failed or would lose
+    /// material, 2 when the input cannot be read.
     #[command(after_long_help = FIX_EXAMPLES)]
     Fix(FixArgs),
     /// Write one self-contained HTML page (WebGL, no network) showing the frames of one
@@ -105,7 +109,10 @@ Examples:
 
 --json prints a record (schema surftrack.fix/1): input, output, valid, and the report:
 stages [{stage, seconds}], cell_size, triangles_in, triangles_out, untouched_fraction,
-flawed_cells, safety_rounds, subcell_rounds, subcell_pairs, improve_edits, validation.";
+flawed_cells, safety_rounds, subcell_rounds, subcell_pairs, improve_edits, validation,
+cell_size_choice {cell_size, rule, thinnest, reason}, clean_input, volumes [{label,
+before, after}], vanished, volume_check {reference, method, spacing, output,
+relative_change, tolerance}, warnings.";
 
 /// Arguments of `surftrack fix`.
 #[derive(Debug, Args)]
@@ -115,9 +122,18 @@ pub struct FixArgs {
     /// Output mesh (.ply or .obj).
     pub output: PathBuf,
     /// Grid cell size ℓ: overlaps and features smaller than ℓ are resolved by remeshing.
-    /// Default: the mean edge length of the input.
+    /// Default: the mean edge length of the input, or a quarter of the thinnest
+    /// material's 3·volume/area where that is smaller (the report says which).
     #[arg(long)]
     pub cell: Option<f64>,
+    /// Accept a repair that loses a material or volume: write it, with a warning on
+    /// stderr and in the record, instead of failing with exit code 1.
+    #[arg(long)]
+    pub allow_loss: bool,
+    /// Largest accepted relative change of the total enclosed volume against the union
+    /// of the input's materials.
+    #[arg(long, default_value_t = 0.02)]
+    pub volume_tolerance: f64,
     /// Print the JSON record instead of a summary.
     #[arg(long)]
     pub json: bool,

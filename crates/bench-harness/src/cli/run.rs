@@ -276,6 +276,15 @@ fn print_summary(record: &RunRecord, out: &Path, record_path: &Path) {
             f.message.lines().next().unwrap_or("")
         ),
     }
+    for s in record.per_step.iter().filter(|s| !s.vanished.is_empty()) {
+        let labels: Vec<String> = s.vanished.iter().map(u32::to_string).collect();
+        println!(
+            "step {}: material{} {} vanished",
+            s.step,
+            if labels.len() > 1 { "s" } else { "" },
+            labels.join(", ")
+        );
+    }
     match (record.frames.first(), record.frames.last()) {
         (Some(first), Some(last)) if record.frames.len() > 1 => println!(
             "frames: {} … {} ({} files)",

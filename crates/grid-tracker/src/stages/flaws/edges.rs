@@ -76,12 +76,45 @@ pub(crate) struct DeepEdges {
     pub(crate) deep: Vec<GridEdge>,
 }
 
+/// The labels of physical, unflawed allocated nodes, sorted: the materials the grid's
+/// implicit surface can rebuild at all.
+pub(crate) fn node_labels(grid: &Grid, materials: &Materials) -> Vec<Label> {
+    let mut out: Vec<Label> = (0..grid.num_nodes() as u32)
+        .into_par_iter()
+        .map(NodeId::new)
+        .filter(|&n| !materials.is_flawed(n))
+        .filter_map(|n| materials.node_material(n).label())
+        .fold(Vec::new, |mut acc, l| {
+            if !acc.contains(&l) {
+                acc.push(l);
+            }
+            acc
+        })
+        .reduce(Vec::new, |mut a, b| {
+            a.extend(b);
+            a
+        });
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
 /// §6.3: a complex edge not adjacent to a non-physical cell is *shallow* when every
 /// label found along it (the labels of its crossing triangles — with physical vectors
 /// all along, these are exactly the materials of its pieces) is the label of a physical,
 /// unflawed node within Manhattan distance `radius` cells of it; otherwise *deep*.
 /// `test == false` skips the neighbourhood search and calls every tested edge deep (the
 /// Fig. 9 ablation).
+///
+/// Labels absent from `rebuildable` (no physical node anywhere carries them, see
+/// [`node_labels`]) never make an edge deep. The paper's test sends an edge to remeshing
+/// so that the explicit surface takes the topology of the implicit one at scale ℓ (thin
+/// sheets split, close surfaces merge); for a material with no grid node at all the
+/// implicit surface has nothing, so remeshing could not change its topology, only delete
+/// it — a whole intersection-free material smaller than ℓ (a coarse cube, a thin plate)
+/// vanished that way. Such a material's complex cells are kept like the paper's
+/// closed-volume cells (small features persist). With a label some node does carry, the
+/// paper's test applies unchanged, so thin parts of a material still split.
 pub(crate) fn deep_edges(
     mesh: &LabeledMesh,
     grid: &Grid,
@@ -91,6 +124,7 @@ pub(crate) fn deep_edges(
     non_physical: impl Fn(IVec3) -> bool + Sync,
 ) -> DeepEdges {
     let offsets = near_offsets(radius);
+    let rebuildable = node_labels(grid, materials);
     let labels = mesh.label_pairs();
     let found: Vec<(bool, Option<GridEdge>)> = edges_with_crossings(grid, materials, 2)
         .map_init(Vec::<Label>::new, |wanted, (n, axis)| {
@@ -111,6 +145,7 @@ pub(crate) fn deep_edges(
             }
             wanted.sort_unstable();
             wanted.dedup();
+            wanted.retain(|w| rebuildable.binary_search(w).is_ok());
             let (a, (b, c)) = (axis.index(), axis.others());
             for d in &offsets {
                 if wanted.is_empty() {

@@ -159,13 +159,16 @@ fn inside_out_sphere_is_flawed_throughout() {
 #[test]
 fn thin_plate_has_deep_edges() {
     // A plate much thinner than a cell, between two grid planes: the rays crossing it
-    // meet label 1 twice per edge while every nearby node is outside.
+    // meet label 1 twice per edge while every nearby node is outside. Label 1 also fills
+    // a big box far away, so the grid can rebuild it: the paper's deep test applies.
     let plate = cube(DVec3::new(0.1, 0.1, 0.6), DVec3::new(1.9, 1.9, 0.9), 0, 1);
+    let far = cube(DVec3::splat(5.1), DVec3::splat(7.9), 0, 1);
+    let mesh = union(&[plate.clone(), far]);
     let opts = GridOptions {
         perturbation: 0.0,
         ..GridOptions::default()
     };
-    let r = run_with(&plate, 0.5, &opts, &FlawOptions::default());
+    let r = run_with(&mesh, 0.5, &opts, &FlawOptions::default());
     let st = r.region.stats();
     assert!(st.deep_edges > 0 && st.deep_cells > 0, "{st:?}");
     assert_eq!(st.non_physical_cells, 0);
@@ -174,7 +177,13 @@ fn thin_plate_has_deep_edges() {
             .cells()
             .any(|c| r.region.flaws(c).contains(CellFlaws::DEEP))
     );
-    assert_clean_boundary(&plate, &r);
+    assert_clean_boundary(&mesh, &r);
+    // The plate alone: no node anywhere carries label 1, so rebuilding could only delete
+    // the material (issue 16); its complex edges are shallow and it stays intact.
+    let r = run_with(&plate, 0.5, &opts, &FlawOptions::default());
+    let st = r.region.stats();
+    assert!(st.complex_edges > 0 && st.deep_edges == 0, "{st:?}");
+    assert!(r.region.is_empty(), "{st:?}");
     // The same plate, thicker than two cells, has physical inside nodes: shallow.
     let slab = cube(DVec3::new(0.1, 0.1, 0.1), DVec3::new(1.9, 1.9, 1.4), 0, 1);
     let r = run_with(&slab, 0.5, &opts, &FlawOptions::default());
