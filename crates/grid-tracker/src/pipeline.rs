@@ -587,6 +587,13 @@ impl EditGuard for DeadlineGuard<'_> {
         self.inner.check(mesh, edit)
     }
 
+    fn offending_moves(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Option<Vec<usize>> {
+        if Instant::now() >= self.deadline {
+            return Some((0..edit.moves.len()).collect());
+        }
+        self.inner.offending_moves(mesh, edit)
+    }
+
     fn committed(&mut self, mesh: &LabeledMesh, edit: &Edit, applied: &Applied) {
         self.inner.committed(mesh, edit, applied);
     }

@@ -97,13 +97,27 @@ fn random_edit_sequences_keep_a_multi_material_mesh_valid_after_every_edit() {
                 }
                 2 => {
                     let (a, b) = random_edge(&mesh, &mut rng);
-                    split_edge(&mut mesh, &mut attrs, &mut NoGuard, a, b, SplitPlacement::Midpoint)
-                        .is_ok()
+                    split_edge(
+                        &mut mesh,
+                        &mut attrs,
+                        &mut NoGuard,
+                        a,
+                        b,
+                        SplitPlacement::Midpoint,
+                    )
+                    .is_ok()
                 }
                 3 => {
                     let (a, b) = random_edge(&mesh, &mut rng);
-                    flip_edge(&mut mesh, &mut attrs, &mut NoGuard, a, b, &FlipParams::default())
-                        .is_ok()
+                    flip_edge(
+                        &mut mesh,
+                        &mut attrs,
+                        &mut NoGuard,
+                        a,
+                        b,
+                        &FlipParams::default(),
+                    )
+                    .is_ok()
                 }
                 _ => {
                     let (a, b) = random_edge(&mesh, &mut rng);
@@ -131,7 +145,10 @@ fn random_edit_sequences_keep_a_multi_material_mesh_valid_after_every_edit() {
         }
     }
     // The sequences did something, and the check did refuse edits.
-    assert!(committed_moves > 300 && refused > 0, "{committed_moves} moves, {refused} refused");
+    assert!(
+        committed_moves > 300 && refused > 0,
+        "{committed_moves} moves, {refused} refused"
+    );
 }
 
 /// Two spheres of different materials, a tenth of an edge apart.
@@ -164,7 +181,8 @@ fn random_batch(mesh: &LabeledMesh, rng: &mut Rng, n: usize, reach: f64) -> Edit
         if edit.moves.len() == n || mesh.vertex_triangles(v).any(|t| claimed[t.idx()]) {
             continue;
         }
-        mesh.vertex_triangles(v).for_each(|t| claimed[t.idx()] = true);
+        mesh.vertex_triangles(v)
+            .for_each(|t| claimed[t.idx()] = true);
         edit.moves.push(VertexMove {
             vertex: v,
             end: mesh.position(v) + rng.vector() * reach,
@@ -188,7 +206,13 @@ fn batched_guard_checks_never_clear_an_intersecting_state() {
         let mut edit = random_batch(&mesh, &mut rng, 64, reach);
         // Would the whole batch intersect? (It must, sometimes, or the test shows nothing.)
         let mut probe = mesh.clone();
-        apply_edit(&mut probe, &mut VertexAttributes::none(), &mut NoGuard, &edit).ok();
+        apply_edit(
+            &mut probe,
+            &mut VertexAttributes::none(),
+            &mut NoGuard,
+            &edit,
+        )
+        .ok();
         if !validate(&probe, &exact).is_valid() {
             intersecting_batches += 1;
         }
@@ -201,7 +225,10 @@ fn batched_guard_checks_never_clear_an_intersecting_state() {
                     break;
                 }
                 Some(blamed) => {
-                    assert!(!blamed.is_empty(), "a verdict against a batch must blame a move");
+                    assert!(
+                        !blamed.is_empty(),
+                        "a verdict against a batch must blame a move"
+                    );
                     blamed_total += blamed.len();
                     let mut i = 0;
                     edit.moves.retain(|m| {
@@ -219,7 +246,10 @@ fn batched_guard_checks_never_clear_an_intersecting_state() {
             apply_edit(&mut mesh, &mut attrs, &mut guard, &edit).expect("a cleared batch commits");
             batched += edit.moves.len();
             let report = validate(&mesh, &exact);
-            assert!(report.is_valid(), "round {round}: a cleared batch intersects: {report}");
+            assert!(
+                report.is_valid(),
+                "round {round}: a cleared batch intersects: {report}"
+            );
         }
         // The blamed moves, one at a time through the ordinary per-move check.
         for m in blamed_moves {
@@ -235,7 +265,10 @@ fn batched_guard_checks_never_clear_an_intersecting_state() {
             }
         }
         let report = validate(&mesh, &exact);
-        assert!(report.is_valid(), "round {round}: a move committed alone intersects: {report}");
+        assert!(
+            report.is_valid(),
+            "round {round}: a move committed alone intersects: {report}"
+        );
     }
     assert!(
         intersecting_batches > 5 && blamed_total > 5 && batched > 500,
