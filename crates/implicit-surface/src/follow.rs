@@ -56,7 +56,7 @@ use std::collections::HashSet;
 use std::time::Instant;
 
 use glam::DVec3;
-use grid_tracker::{GridParams, GridTracker};
+use grid_tracker::{GridParams, GridTracker, ImproveScope};
 use mesh_core::remesh::VertexAttributes;
 use mesh_core::{Label, LabeledMesh, RegionCensus, StepReport, SurfaceTracker, VertexId};
 use rayon::prelude::*;
@@ -112,7 +112,13 @@ impl FollowParams {
             hint_push: 1.0,
             deep_radius: 0,
             debris_volume: 0.25,
-            tracker: GridParams::default(),
+            // Projection moves every vertex every frame: the whole surface is changed
+            // surface, so improvement keeps its whole-mesh scope here (the grid backend's
+            // local default seeds only from rebuilt and degraded triangles).
+            tracker: GridParams {
+                improve_scope: ImproveScope::Whole,
+                ..GridParams::default()
+            },
         }
     }
 

@@ -107,11 +107,6 @@ pub fn smooth_vertices(
     commit_moves(mesh, attrs, guard, params, &proposals)
 }
 
-/// Rounds of batches per pass; what is left after them is committed one move at a time. A
-/// mesh's vertex colouring needs about 7 independent sets, each split into batches of at
-/// most [`MAX_BATCH`] moves.
-const MAX_BATCH_ROUNDS: usize = 64;
-
 /// Moves per batch at most. A guard that finds offenders by bisection (a CCD guard: the
 /// sweep of a batch is one pseudo-motion, and a collision somewhere in it says nothing of
 /// where) pays about `log₂(batch)` checks per offender, each of up to half the batch, so
@@ -123,8 +118,8 @@ const MAX_BATCH: usize = 256;
 const MAX_GUARD_ROUNDS: usize = 4;
 
 /// Commits proposed moves in batches (see the module doc): each round takes, in the given
-/// order, the moves whose triangles no earlier move of the round touches (an independent
-/// set), makes the local checks of every move in parallel, and asks the guard about the
+/// order, the longest run of moves whose triangles no earlier move of the run touches (an
+/// independent set that keeps the commit order of one move at a time), makes the local checks of every move in parallel, and asks the guard about the
 /// batch once ([`EditGuard::offending_moves`]). Blamed moves, and whatever a batch could
 /// not clear, are committed one at a time afterwards, each as its own guarded edit, so
 /// the outcome is what per-move checking would allow, at the price of one index query
@@ -143,18 +138,25 @@ pub(crate) fn commit_moves(
     let mut batch: Vec<(VertexId, DVec3)> = Vec::new();
     let mut rest: Vec<(VertexId, DVec3)> = Vec::new();
     let mut edit = Edit::default();
-    for _ in 0..MAX_BATCH_ROUNDS {
+    // Each round takes at least the front move of the queue: bounded by the proposals.
+    for _ in 0..=proposals.len() {
         if pending.is_empty() {
             break;
         }
-        // An independent set, greedily in the given order (deterministic).
+        // The longest independent run at the front of the queue: moves are committed in
+        // the order they were proposed, as one at a time would (the order decides which
+        // of two neighbouring moves sees the other's result).
         batch.clear();
         rest.clear();
+        let mut open = true;
         for &(v, d) in &pending {
-            if !mesh.is_vertex_alive(v) {
+            if !open {
+                rest.push((v, d));
+            } else if !mesh.is_vertex_alive(v) {
                 out.refused += 1;
             } else if batch.len() == MAX_BATCH || mesh.vertex_triangles(v).any(|t| claimed[t.idx()])
             {
+                open = false;
                 rest.push((v, d));
             } else {
                 mesh.vertex_triangles(v)
