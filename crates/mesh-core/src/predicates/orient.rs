@@ -223,6 +223,16 @@ pub fn orient2d_axis(axis: Axis, a: DVec3, b: DVec3, c: DVec3) -> Sign {
     orient2d(axis.project(a), axis.project(b), axis.project(c))
 }
 
+/// Exactly collinear points: the normal `(b − a) × (c − a)` is exactly zero, i.e.
+/// [`orient2d_axis`] is zero along all three axes. A triangle on such points has zero
+/// area (validation's layer 3, and the structural check of every remeshing edit).
+#[inline]
+pub fn collinear(a: DVec3, b: DVec3, c: DVec3) -> bool {
+    Axis::ALL
+        .iter()
+        .all(|&axis| orient2d_axis(axis, a, b, c) == Sign::Zero)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -323,14 +333,4 @@ mod tests {
             prop_assert_eq!(orient3d(a, b, c, on_plane), orient3d_ref(a, b, c, on_plane));
         }
     }
-}
-
-/// Exactly collinear points: the normal `(b − a) × (c − a)` is exactly zero, i.e.
-/// [`orient2d_axis`] is zero along all three axes. A triangle on such points has zero
-/// area (validation's layer 3, and the structural check of every remeshing edit).
-#[inline]
-pub fn collinear(a: DVec3, b: DVec3, c: DVec3) -> bool {
-    Axis::ALL
-        .iter()
-        .all(|&axis| orient2d_axis(axis, a, b, c) == Sign::Zero)
 }
