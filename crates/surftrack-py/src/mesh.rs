@@ -389,25 +389,28 @@ impl PyFixReport {
     }
 }
 
-/// fix(mesh, cell=None, intersections=True, **options) -> (Mesh, FixReport): one-shot
+/// fix(mesh, cell=None, intersections=True, allow_loss=False, **options) -> (Mesh, FixReport): one-shot
 /// repair / multi-material union with the grid pipeline. The input may overlap itself
 /// anywhere; the output is closed, consistently labelled and intersection-free, and
 /// every triangle away from the flawed cells is the input's own.
 ///
-/// `cell` is the grid cell size (default: the mean edge length); `options` are grid
+/// `cell` is the grid cell size (default: fitted to the thinnest material); `options` are grid
 /// options by name, as `--set grid.<path>` (e.g. `resampling="global"`,
 /// `**{"flaws.deep_cell_test": False}`; `__` also separates levels). `intersections`
 /// checks the output for exact self-intersections in the report.
 ///
 /// Raises ValueError for an invalid input (open, inconsistently labelled) or unknown
-/// option (listing the known ones), TrackError when a stage fails.
+/// option (listing the known ones), TrackError when a stage fails or when the repair
+/// would lose a material or change the union's volume beyond the tolerance (unless
+/// `allow_loss`, which turns that into a warning in the report).
 #[pyfunction]
-#[pyo3(signature = (mesh, cell = None, intersections = true, **options))]
+#[pyo3(signature = (mesh, cell = None, intersections = true, allow_loss = false, **options))]
 pub fn fix(
     py: Python<'_>,
     mesh: PyRef<'_, PyMesh>,
     cell: Option<f64>,
     intersections: bool,
+    allow_loss: bool,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<(PyMesh, PyFixReport)> {
     let base = bench_harness::options::RunOptions {
@@ -428,13 +431,16 @@ pub fn fix(
     let fix_options = FixOptions {
         params,
         validate_intersections: intersections,
+        allow_loss,
+        ..FixOptions::default()
     };
     let input = mesh.mesh.clone();
     let outcome = py.detach(|| {
         guarded("fix", || {
             fix_with(&input, &fix_options).map_err(|e| match e {
                 FixError::InvalidInput(_) | FixError::BadParams(_) => value_error(e),
-                FixError::Pipeline(_) | FixError::InvalidOutput(_) => {
+                // A repair that would lose a material is refused with the numbers.
+                FixError::Pipeline(_) | FixError::InvalidOutput(_) | FixError::Loss(_) => {
                     TrackError::new_err(e.to_string())
                 }
             })

@@ -157,8 +157,13 @@ def test_fix_repairs_overlapping_copies():
     assert report.triangles_in == overlapping.num_triangles
     assert report.triangles_out == fixed.num_triangles
     assert 0.0 < report.untouched_fraction < 1.0 and report.flawed_cells > 0
-    # Options by name reach the pipeline: a coarser cell changes the result.
-    coarse, r2 = surftrack.fix(overlapping, cell=2 * report.cell_size, resampling="global")
+    # Options by name reach the pipeline: a coarser cell changes the result. At twice the
+    # cell the union loses a few per cent of its volume: an error unless allowed.
+    with pytest.raises(surftrack.TrackError, match="loses material"):
+        surftrack.fix(overlapping, cell=2 * report.cell_size, resampling="global")
+    coarse, r2 = surftrack.fix(
+        overlapping, cell=2 * report.cell_size, resampling="global", allow_loss=True
+    )
     assert r2.cell_size == pytest.approx(2 * report.cell_size)
     assert coarse.validate(intersections=True).valid
 
@@ -275,8 +280,8 @@ def test_file_errors_raise_os_error(tmp_path):
 
 
 def test_the_gil_is_released_during_a_step():
-    # Finer meshes until one step takes long enough to tell (bounded: three sizes).
-    for resolution in (24, 48, 96):
+    # Finer meshes until one step takes long enough to tell (bounded: four sizes).
+    for resolution in (24, 48, 96, 192):
         tracker = surftrack.Tracker(surftrack.generate("double-bubble", resolution=resolution))
         proposed = tracker.vertices * 1.02
         ticks = []

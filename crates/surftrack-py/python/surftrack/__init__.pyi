@@ -123,9 +123,15 @@ class FixReport:
     def as_dict(self) -> Dict[str, Any]: ...
 
 def fix(
-    mesh: Mesh, cell: Optional[float] = None, intersections: bool = True, **options: Any
+    mesh: Mesh,
+    cell: Optional[float] = None,
+    intersections: bool = True,
+    allow_loss: bool = False,
+    **options: Any,
 ) -> Tuple[Mesh, FixReport]:
-    """One-shot repair / multi-material union (grid pipeline)."""
+    """One-shot repair / multi-material union (grid pipeline). A repair that would lose a
+    material (or change the union's volume beyond the tolerance) raises TrackError unless
+    allow_loss is true."""
 
 def generate(
     scene: str,
