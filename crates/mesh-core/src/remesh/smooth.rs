@@ -117,10 +117,10 @@ const MAX_BATCH: usize = 256;
 /// before the rest of that batch is committed one move at a time.
 const MAX_GUARD_ROUNDS: usize = 4;
 
-/// Commits proposed moves in batches (see the module doc): each round takes, in the given
-/// order, the longest run of moves whose triangles no earlier move of the run touches (an
-/// independent set that keeps the commit order of one move at a time), makes the local checks of every move in parallel, and asks the guard about the
-/// batch once ([`EditGuard::offending_moves`]). Blamed moves, and whatever a batch could
+/// Commits proposed moves in batches (see the module doc): each round takes every pending
+/// move that no earlier pending move shares a triangle with (an independent set that keeps
+/// the commit order of one move at a time for every pair of neighbouring moves), makes
+/// the local checks of every move in parallel, and asks the guard about the batch once ([`EditGuard::offending_moves`]). Blamed moves, and whatever a batch could
 /// not clear, are committed one at a time afterwards, each as its own guarded edit, so
 /// the outcome is what per-move checking would allow, at the price of one index query
 /// per batch instead of one per move.
@@ -137,36 +137,41 @@ pub(crate) fn commit_moves(
     let mut claimed = vec![false; mesh.triangle_capacity()];
     let mut batch: Vec<(VertexId, DVec3)> = Vec::new();
     let mut rest: Vec<(VertexId, DVec3)> = Vec::new();
+    let mut touched = Vec::new();
     let mut edit = Edit::default();
     // Each round takes at least the front move of the queue: bounded by the proposals.
     for _ in 0..=proposals.len() {
         if pending.is_empty() {
             break;
         }
-        // The longest independent run at the front of the queue: moves are committed in
-        // the order they were proposed, as one at a time would (the order decides which
-        // of two neighbouring moves sees the other's result).
+        // The moves no earlier pending move shares a triangle with: an independent set
+        // in which, of any two neighbouring moves, the one proposed first is committed
+        // first, as one at a time would (that order decides which of them sees the other's
+        // result). A move passed over blocks its triangles for the rest of the round, so a
+        // later neighbour of it waits too; moves that touch nothing in common commute.
         batch.clear();
         rest.clear();
-        let mut open = true;
+        touched.clear();
         for &(v, d) in &pending {
-            if !open {
-                rest.push((v, d));
-            } else if !mesh.is_vertex_alive(v) {
+            if !mesh.is_vertex_alive(v) {
                 out.refused += 1;
-            } else if batch.len() == MAX_BATCH || mesh.vertex_triangles(v).any(|t| claimed[t.idx()])
-            {
-                open = false;
-                rest.push((v, d));
-            } else {
-                mesh.vertex_triangles(v)
-                    .for_each(|t| claimed[t.idx()] = true);
+                continue;
+            }
+            let free =
+                batch.len() < MAX_BATCH && mesh.vertex_triangles(v).all(|t| !claimed[t.idx()]);
+            if free {
                 batch.push((v, d));
+            } else {
+                rest.push((v, d));
+            }
+            for t in mesh.vertex_triangles(v) {
+                if !std::mem::replace(&mut claimed[t.idx()], true) {
+                    touched.push(t);
+                }
             }
         }
-        for &(v, _) in &batch {
-            mesh.vertex_triangles(v)
-                .for_each(|t| claimed[t.idx()] = false);
+        for &t in &touched {
+            claimed[t.idx()] = false;
         }
         // Local checks, in parallel: each move's triangles are its own.
         let snapshot: &LabeledMesh = mesh;
