@@ -578,28 +578,29 @@ impl EditGuard for StaticIntersectionGuard {
             }));
         }
         spans.push(changed.len());
-        // The moved triangles' end boxes on a grid of their own (cell: their mean size),
-        // for the moved-against-moved tests; the index holds only current boxes.
-        let cell = changed
+        // The moved triangles' end boxes sorted by their lower x, for the moved-against-
+        // moved tests (the index holds only current boxes): a query scans the slab of
+        // boxes that can reach it in x, each box once.
+        let mut by_x: Vec<u32> = (0..changed.len() as u32).collect();
+        by_x.sort_unstable_by(|&a, &b| {
+            let (a, b) = (&changed[a as usize].1.bounds, &changed[b as usize].1.bounds);
+            a.min.x.total_cmp(&b.min.x)
+        });
+        let widest = changed
             .iter()
-            .map(|(_, a)| (a.bounds.max - a.bounds.min).max_element())
-            .sum::<f64>()
-            / changed.len().max(1) as f64;
-        let mut ends = DirtyGrid::default();
-        ends.reset(cell);
-        for (k, (_, a)) in changed.iter().enumerate() {
-            ends.insert(TriId::new(k as u32), &a.bounds);
-        }
+            .map(|(_, a)| a.bounds.max.x - a.bounds.min.x)
+            .fold(0.0, f64::max);
         let index = self.index.as_ref();
         let dirty = &self.dirty;
         let moved: &[bool] = &claimed;
-        let ends = &ends;
-        let changed = &changed;
-        // Per move: one index query with the box around its triangles, one grid query.
+        let (changed, by_x) = (&changed, &by_x[..]);
+        // Per move: one index query and one grid query with the box around its
+        // triangles, the candidates deduplicated (the grid files a box under every cell
+        // it spans), then the exact tests.
         let blamed: Vec<[usize; 2]> = (0..edit.moves.len())
             .into_par_iter()
             .with_min_len(16)
-            .filter_map(|i| {
+            .map_init(Vec::new, |found: &mut Vec<TriId>, i| {
                 let mine = &changed[spans[i]..spans[i + 1]];
                 let all = mine.iter().fold(Aabb::EMPTY, |u, (_, a)| u.union(a.bounds));
                 let hits = |c: &Keyed| {
@@ -608,36 +609,43 @@ impl EditGuard for StaticIntersectionGuard {
                             .iter()
                             .any(|(_, a)| a.bounds.overlaps(&c.bounds) && intersect_keyed(a, c))
                 };
-                let mut hit = None;
+                found.clear();
                 let mut unmoved = |t: TriId| {
-                    if hit.is_some()
-                        || moved.get(t.idx()).copied().unwrap_or(true)
-                        || !mesh.is_triangle_alive(t)
-                    {
-                        return;
-                    }
-                    let tri = mesh.tri(t);
-                    let c = Keyed::new(tri.map(|v| v.raw()), tri.map(|v| mesh.position(v)));
-                    if hits(&c) {
-                        hit = Some([i, i]);
+                    if !moved.get(t.idx()).copied().unwrap_or(true) {
+                        found.push(t);
                     }
                 };
                 if let Some(index) = index {
                     index.query(&all, 0.0, |id| unmoved(TriId::new(id)));
                 }
                 dirty.query(&all, &mut unmoved);
-                if hit.is_none() {
-                    // Another move's triangles at their end positions, each pair tested
-                    // from its lower move.
-                    ends.query(&all, |k| {
-                        let (j, c) = changed[k.idx()];
-                        if hit.is_none() && j > i && hits(&c) {
-                            hit = Some([i, j]);
-                        }
-                    });
+                found.sort_unstable();
+                found.dedup();
+                let unmoved_hit = found.iter().any(|&t| {
+                    mesh.is_triangle_alive(t) && {
+                        let tri = mesh.tri(t);
+                        hits(&Keyed::new(
+                            tri.map(|v| v.raw()),
+                            tri.map(|v| mesh.position(v)),
+                        ))
+                    }
+                });
+                if unmoved_hit {
+                    return Some([i, i]);
                 }
-                hit
+                // Another move's triangles at their end positions, each pair tested from
+                // its lower move.
+                let from = by_x
+                    .partition_point(|&k| changed[k as usize].1.bounds.min.x < all.min.x - widest);
+                by_x[from..]
+                    .iter()
+                    .take_while(|&&k| changed[k as usize].1.bounds.min.x <= all.max.x)
+                    .find_map(|&k| {
+                        let (j, c) = &changed[k as usize];
+                        (*j > i && hits(c)).then_some([i, *j])
+                    })
             })
+            .flatten()
             .collect();
         let mut blamed: Vec<usize> = blamed.into_iter().flatten().collect();
         self.claimed = claimed;
