@@ -436,6 +436,20 @@ impl LabeledMesh {
         verts: [VertexId; 3],
         labels: [Label; 2],
     ) -> Result<TriId, MeshError> {
+        let t = self.add_triangle_unpaired(verts, labels)?;
+        self.relink_triangle_edges(verts);
+        Ok(t)
+    }
+
+    /// [`Self::add_triangle`] without re-pairing its edges: the caller re-pairs them (with
+    /// [`Self::relink_edges`]) before anything reads the corner table's opposites. An
+    /// edit that adds and removes many triangles around the same edges re-pairs each edge
+    /// once instead of once per triangle.
+    pub(crate) fn add_triangle_unpaired(
+        &mut self,
+        verts: [VertexId; 3],
+        labels: [Label; 2],
+    ) -> Result<TriId, MeshError> {
         for v in verts {
             if !self.is_vertex_alive(v) {
                 return Err(MeshError::NoSuchVertex(v));
@@ -462,15 +476,23 @@ impl LabeledMesh {
         for k in 0..3 {
             self.ring_insert(CornerId::of(t, Side::Front, k));
         }
-        for k in 0..3 {
-            self.relink_edge(verts[(k + 1) % 3], verts[(k + 2) % 3]);
-        }
         Ok(t)
     }
 
     /// Removes a triangle; its edges are re-paired among the remaining triangles.
     /// Its vertices stay (remove them with [`Self::remove_vertex`] if they became isolated).
     pub fn remove_triangle(&mut self, t: TriId) -> Result<(), MeshError> {
+        let verts = self.remove_triangle_unpaired(t)?;
+        self.relink_triangle_edges(verts);
+        Ok(())
+    }
+
+    /// [`Self::remove_triangle`] without re-pairing the edges it leaves (see
+    /// [`Self::add_triangle_unpaired`]); returns its vertices.
+    pub(crate) fn remove_triangle_unpaired(
+        &mut self,
+        t: TriId,
+    ) -> Result<[VertexId; 3], MeshError> {
         let verts = self.tri_checked(t)?;
         for k in 0..3 {
             self.ring_remove(CornerId::of(t, Side::Front, k));
@@ -479,10 +501,28 @@ impl LabeledMesh {
         self.tri_alive[t.idx()] = false;
         self.free_tris.push(t);
         self.live_tris -= 1;
+        Ok(verts)
+    }
+
+    fn relink_triangle_edges(&mut self, verts: [VertexId; 3]) {
         for k in 0..3 {
             self.relink_edge(verts[(k + 1) % 3], verts[(k + 2) % 3]);
         }
-        Ok(())
+    }
+
+    /// Re-pairs each distinct edge among `edges` (either orientation) once; `edges` is
+    /// sorted and deduplicated in place.
+    pub(crate) fn relink_edges(&mut self, edges: &mut Vec<[VertexId; 2]>) {
+        for e in edges.iter_mut() {
+            if e[1] < e[0] {
+                e.swap(0, 1);
+            }
+        }
+        edges.sort_unstable();
+        edges.dedup();
+        for &[a, b] in edges.iter() {
+            self.relink_edge(a, b);
+        }
     }
 
     /// Re-pairs the sides around one edge from the current geometry.

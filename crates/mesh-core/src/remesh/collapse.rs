@@ -103,6 +103,26 @@ pub enum CollapseError {
     Edit(#[from] EditError),
 }
 
+impl CollapseError {
+    /// A short fixed name of the reason, for counting refusals per kind without
+    /// formatting a message for each.
+    pub fn reason(&self) -> &'static str {
+        match self {
+            CollapseError::Refused(r) => match r {
+                CollapseRefusal::NoEdge => "no edge",
+                CollapseRefusal::Features => "features",
+                CollapseRefusal::Pinch => "pinch",
+                CollapseRefusal::Link => "link condition",
+                CollapseRefusal::Inversion => "inversion",
+                CollapseRefusal::NormalChange => "normal change",
+                CollapseRefusal::EdgeLength => "edge length",
+                CollapseRefusal::VolumeChange => "volume change",
+            },
+            CollapseError::Edit(e) => e.reason(),
+        }
+    }
+}
+
 /// Where the merged vertex goes, as the parameter `t` along `a → b` (0, ½ or 1).
 fn placement(
     ka: VertexKind,

@@ -92,6 +92,18 @@ pub enum EditError {
     Mesh(#[from] MeshError),
 }
 
+impl EditError {
+    /// A short fixed name of the reason (the guard's own for a veto).
+    pub fn reason(&self) -> &'static str {
+        match self {
+            EditError::Vetoed(why) => why,
+            EditError::Malformed(_) => "malformed",
+            EditError::Structure(_) => "structure",
+            EditError::Mesh(_) => "mesh capacity",
+        }
+    }
+}
+
 impl Edit {
     /// Empties the edit, keeping its allocations.
     pub fn clear(&mut self) {
@@ -249,12 +261,15 @@ pub(crate) fn commit_guarded(
         .into());
     }
 
-    // From here on nothing can fail: every id was checked above.
+    // From here on nothing can fail: every id was checked above. Triangles come and go
+    // without re-pairing; every edge they touched is re-paired once at the end.
+    let mut edges = Vec::with_capacity(3 * (edit.remove_tris.len() + edit.add_tris.len()));
     for m in &edit.moves {
         mesh.set_position(m.vertex, m.end);
     }
     for &t in &edit.remove_tris {
-        mesh.remove_triangle(t)?;
+        let v = mesh.remove_triangle_unpaired(t)?;
+        edges.extend([[v[0], v[1]], [v[1], v[2]], [v[2], v[0]]]);
     }
     let mut applied = Applied::default();
     for nv in &edit.new_vertices {
@@ -262,12 +277,16 @@ pub(crate) fn commit_guarded(
         applied.vertices.push(v);
     }
     for (verts, labels) in &edit.add_tris {
-        let ids = verts.map(|r| match r {
+        let v = verts.map(|r| match r {
             VertexRef::Old(v) => v,
             VertexRef::New(i) => applied.vertices[i as usize],
         });
-        applied.triangles.push(mesh.add_triangle(ids, *labels)?);
+        applied
+            .triangles
+            .push(mesh.add_triangle_unpaired(v, *labels)?);
+        edges.extend([[v[0], v[1]], [v[1], v[2]], [v[2], v[0]]]);
     }
+    mesh.relink_edges(&mut edges);
     for &v in &edit.remove_vertices {
         mesh.remove_vertex(v)?;
     }

@@ -26,7 +26,10 @@
 //! candidate against the current mesh, so the result does not depend on the thread count
 //! and no edit scans the whole mesh (the guard aside).
 
+use std::collections::BTreeMap;
+
 use rayon::prelude::*;
+
 use serde::Serialize;
 
 use crate::corner::Side;
@@ -185,6 +188,9 @@ pub struct ImproveReport {
     pub split_midpoint_fallbacks: usize,
     /// Edge collapses.
     pub collapse: OpCounts,
+    /// Collapses refused or vetoed, per reason ([`CollapseError::reason`]): which check
+    /// holds the mesh back when short edges stay.
+    pub collapse_refusals: BTreeMap<&'static str, usize>,
     /// Edge flips.
     pub flip: OpCounts,
     /// Smoothing moves.
@@ -760,8 +766,13 @@ impl<'p> Run<'p> {
                     counts.done += 1;
                     self.report.volume_change_bound += dv;
                 }
-                Err(CollapseError::Edit(EditError::Vetoed(_))) => counts.vetoed += 1,
-                Err(_) => counts.refused += 1,
+                Err(e) => {
+                    match e {
+                        CollapseError::Edit(EditError::Vetoed(_)) => counts.vetoed += 1,
+                        _ => counts.refused += 1,
+                    }
+                    *self.report.collapse_refusals.entry(e.reason()).or_default() += 1;
+                }
             }
         }
         let done = counts.done - before;
