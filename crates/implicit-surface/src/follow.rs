@@ -40,13 +40,24 @@
 //!   (`F < 0`: left on a neck that the field just cut) inward, across the neck; the
 //!   resulting overlap or inverted tube is a flaw the tracker rebuilds from the grid.
 //!
+//! **Deep, fast overlaps.** Every vertex is projected onto its *own* sheet
+//! ([`project_point_oriented`]): where `F > 0` at a vertex the surface grew over it and
+//! the vertex moves out along its own normal, never back through the inside to the
+//! nearest point of another element's surface. Plain Newton did the latter when one
+//! element moved into another by more than about ℓ per frame: the sheet folded onto the
+//! union's surface with its orientation reversed, the two windings cancelled, and the
+//! tracker's exact ray casting found *outside* material vectors in the middle of the
+//! overlap (physical ones, so the labelling of non-physical regions was never involved);
+//! the material vanished (crossing at ℓ = 0.1 or 0.15 in 10 frames, ℓ = 0.08 in 12–15).
+//! Now a vertex that finds no surface on its ray within `max_travel` stays inside the other
+//! element; that overlap is non-physical and the tracker merges it.
+//!
 //! **Limits, measured** (`examples/metaballs.rs`): topology follows the field's to
-//! within a frame or two when a vertex moves less than about ½ ℓ per frame. Faster, deep
-//! overlaps (e.g. the crossing at ℓ = 0.1 in 40 frames, 1.1 ℓ of relative motion per
-//! frame) can make the tracker label an overlap as outside and eat the merged shape with
-//! `deep_radius = 0`, while `deep_radius = 2` (the tracker's default) survives that case
-//! but misses the three-blob split at ℓ = 0.12 in 30 frames. Surfaces born away from
-//! the mesh (a new blob appearing from nothing) are never seen — as in the paper.
+//! within a frame or two when a vertex moves less than about ½ ℓ per frame; at 1–3 ℓ per
+//! frame (the crossing at ℓ = 0.08–0.15 in 8–15 frames) nothing vanishes any more, but
+//! the split after the crossing can lag the field's by a frame or two and leave a small
+//! extra piece for a frame. Surfaces born away from the mesh (a new blob appearing from
+//! nothing) are never seen — as in the paper.
 //!
 //! The follower's own mesh ([`Follower::mesh`]) is the tracker's mesh re-projected onto
 //! `F(·, t₁)`: the tracker's repairs and smoothing move vertices slightly off the
@@ -64,7 +75,9 @@ use rayon::prelude::*;
 use crate::error::{ImplicitError, invalid};
 use crate::field::ImplicitField;
 use crate::polygonize::polygonize_mesh;
-use crate::project::{ProjectParams, Projection, ProjectionOutcome, project_point};
+use crate::project::{
+    ProjectParams, Projection, ProjectionOutcome, project_point, project_point_oriented,
+};
 
 /// Parameters of the follower; lengths are fractions of the target edge length ℓ.
 #[derive(Clone, Debug, PartialEq)]
@@ -307,19 +320,17 @@ pub fn propose(
         }
     }
     let pp = params.projection();
+    // Each vertex keeps to its own sheet ([`project_point_oriented`]): without the
+    // orientation, deep overlaps fold sheets onto each other and their material vanishes.
+    let normals = outward_vertex_normals(mesh);
     let projections: Vec<Option<Projection>> = (0..mesh.vertex_capacity())
         .into_par_iter()
         .with_min_len(256)
         .map(|v| {
             mesh.is_vertex_alive(VertexId::new(v as u32))
-                .then(|| project_point(field, positions[v], t, &pp))
+                .then(|| project_point_oriented(field, positions[v], normals[v], t, &pp))
         })
         .collect();
-    let normals = if params.hint_push > 0.0 {
-        outward_vertex_normals(mesh)
-    } else {
-        Vec::new()
-    };
     let push = params.hint_push * params.edge_length;
     let mut quasi_critical = Vec::new();
     for (v, pr) in projections.iter().enumerate() {
@@ -377,28 +388,41 @@ pub fn reproject(
     let alive: Vec<bool> = (0..mesh.vertex_capacity())
         .map(|v| mesh.is_vertex_alive(VertexId::new(v as u32)))
         .collect();
-    let attempt = |p: DVec3| -> Option<DVec3> {
-        let pr = project_point(field, p, t, params);
+    // Oriented, as in [`propose`]: a tracker mesh still overlapping itself must not be
+    // folded onto the other sheet's surface by the re-projection either. Where the own
+    // sheet's ray finds no surface within reach (a rebuilt vertex whose normal runs
+    // along the surface), plain Newton as before.
+    let normals = outward_vertex_normals(mesh);
+    let attempt = |p: DVec3, n: DVec3| -> Option<DVec3> {
+        let pr = project_point_oriented(field, p, n, t, params);
+        let pr = if pr.is_quasi_critical() {
+            project_point(field, p, t, params)
+        } else {
+            pr
+        };
         (!pr.is_quasi_critical() && pr.position.is_finite()).then_some(pr.position)
     };
     let mut results: Vec<Option<DVec3>> = mesh
         .positions()
         .par_iter()
         .zip(alive.par_iter())
+        .zip(normals.par_iter())
         .with_min_len(256)
-        .map(|(&p, &live)| if live { attempt(p) } else { Some(p) })
+        .map(|((&p, &live), &n)| if live { attempt(p, n) } else { Some(p) })
         .collect();
     if results.iter().any(Option::is_none) {
-        let normals = outward_vertex_normals(mesh);
         for (v, r) in results.iter_mut().enumerate() {
             if r.is_some() {
                 continue;
             }
             let p = mesh.positions()[v];
             let toward = if field.value(p, t) > 0.0 { 1.0 } else { -1.0 };
-            *r = [0.25, 0.5]
-                .iter()
-                .find_map(|&s| attempt(p + normals[v] * (toward * s * params.max_travel)));
+            *r = [0.25, 0.5].iter().find_map(|&s| {
+                attempt(
+                    p + normals[v] * (toward * s * params.max_travel),
+                    normals[v],
+                )
+            });
         }
     }
     let mut failed = 0;

@@ -49,5 +49,7 @@ pub use follow::{
     outward_vertex_normals, propose, reproject,
 };
 pub use polygonize::{Polygonization, polygonize, polygonize_mesh};
-pub use project::{ProjectParams, Projection, ProjectionOutcome, project_point};
+pub use project::{
+    ProjectParams, Projection, ProjectionOutcome, project_point, project_point_oriented,
+};
 pub use refine::{RefineParams, Refinement, refine};

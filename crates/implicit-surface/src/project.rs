@@ -191,6 +191,116 @@ pub fn project_point(
     }
 }
 
+/// Bound on bisection steps of [`project_point_oriented`]'s ray search: 60 halvings take
+/// any bracket of at most `max_travel` below `1e-18 · max_travel`, past `tolerance`.
+const MAX_BISECTIONS: usize = 60;
+
+/// Projects the mesh vertex at `p`, whose own outward unit normal is `outward`, onto
+/// `F(·, t) = 0` without leaving its own sheet: [`project_point`], unless its walk went
+/// the wrong way along the vertex's own normal, in which case along the normal ray.
+///
+/// Why: where two surfaces overlap deeply within one frame, a vertex of one can start
+/// inside the other (`F > 0` at its old position). Its own sheet moved *outward* there
+/// (the inside grew over it), but Newton walks down `∇F`, and inside the blend `−∇F`
+/// leads to the nearest point of the *other* sheet's surface, reached moving inward
+/// (against `outward`). Landing there folds the sheet onto the union's surface with its
+/// orientation reversed: the two sheets' windings cancel, so the exact ray casting of the
+/// tracker (§5 of Heiss-Synak et al. 2024) finds material vectors that say *outside* in
+/// the middle of the overlap, physical ones, and the tracker keeps the overlap as empty
+/// space: the material vanishes. The tracker's labelling is right for the mesh it is
+/// given; the fold is made here. So the rule is the level-set one: where `F(p) > 0` the
+/// surface passed over `p` outward and the vertex must move along `+outward`; where
+/// `F(p) < 0`, along `−outward`. A Newton result that breaks it is replaced by the first
+/// root of `F` on that ray within `max_travel` (bracketed in steps of `max_step`, then
+/// bisected); with no root in reach the vertex stops at `max_travel` on the ray, inside
+/// the other body, and reports [`ProjectionOutcome::NotConverged`]: the overlap it makes
+/// is non-physical (material vector 2 for one label), which the tracker merges.
+///
+/// `outward = 0` (no orientation known) is plain [`project_point`].
+pub fn project_point_oriented(
+    field: &(impl ImplicitField + ?Sized),
+    p: DVec3,
+    outward: DVec3,
+    t: f64,
+    params: &ProjectParams,
+) -> Projection {
+    let newton = project_point(field, p, t, params);
+    if outward == DVec3::ZERO || !newton.position.is_finite() {
+        return newton;
+    }
+    let f0 = field.value(p, t);
+    if !f0.is_finite() || f0 == 0.0 {
+        return newton;
+    }
+    let dir = if f0 > 0.0 { outward } else { -outward };
+    if (newton.position - p).dot(dir) >= 0.0 {
+        return newton;
+    }
+    project_along_ray(field, p, dir, f0, t, params)
+}
+
+/// The first root of `F(·, t)` on the ray `p + s·dir`, `0 < s ≤ max_travel` (see
+/// [`project_point_oriented`]); `f0 = F(p)`, non-zero.
+fn project_along_ray(
+    field: &(impl ImplicitField + ?Sized),
+    p: DVec3,
+    dir: DVec3,
+    f0: f64,
+    t: f64,
+    params: &ProjectParams,
+) -> Projection {
+    let steps = (params.max_travel / params.max_step).ceil().clamp(1.0, 1e6) as usize;
+    let at = |s: f64| p + dir * s;
+    let (mut lo, mut hi) = (0.0, None);
+    for k in 1..=steps {
+        let s = (k as f64 * params.max_step).min(params.max_travel);
+        let f = field.value(at(s), t);
+        if !f.is_finite() {
+            break;
+        }
+        if (f > 0.0) != (f0 > 0.0) || f == 0.0 {
+            hi = Some(s);
+            break;
+        }
+        lo = s;
+    }
+    let Some(mut hi) = hi else {
+        let q = at(lo);
+        return Projection {
+            position: q,
+            value: field.value(q, t),
+            outcome: ProjectionOutcome::NotConverged,
+        };
+    };
+    for k in 0..MAX_BISECTIONS {
+        if hi - lo <= params.tolerance {
+            let q = at(0.5 * (lo + hi));
+            return Projection {
+                position: q,
+                value: field.value(q, t),
+                outcome: ProjectionOutcome::Converged {
+                    iterations: k as u32,
+                },
+            };
+        }
+        let mid = 0.5 * (lo + hi);
+        let f = field.value(at(mid), t);
+        if (f > 0.0) == (f0 > 0.0) && f != 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let q = at(0.5 * (lo + hi));
+    Projection {
+        position: q,
+        value: field.value(q, t),
+        outcome: ProjectionOutcome::Converged {
+            iterations: MAX_BISECTIONS as u32,
+        },
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -255,6 +365,47 @@ mod tests {
         // Far outside every kernel: flat, quasi-critical too.
         let far = project_point(&f, DVec3::splat(5.0), 0.0, &ProjectParams::default());
         assert!(far.is_quasi_critical());
+    }
+
+    #[test]
+    fn an_oriented_projection_keeps_the_vertex_on_its_own_sheet() {
+        // A vertex at x = 0.5 inside the unit sphere whose own sheet faces −x: the sphere
+        // grew over it, so its sheet moved outward, to −x. Newton goes to the sphere's
+        // nearest point (1, 0, 0), against the normal: a fold. The oriented projection
+        // walks the normal ray to the far side instead.
+        let s = SphereField::new(DVec3::ZERO, 1.0);
+        let params = ProjectParams::default();
+        let p = DVec3::new(0.5, 0.0, 0.0);
+        let plain = project_point(&s, p, 0.0, &params);
+        assert!((plain.position - DVec3::X).length() < 1e-6);
+        let pr = project_point_oriented(&s, p, -DVec3::X, 0.0, &params);
+        assert!(
+            matches!(pr.outcome, ProjectionOutcome::Converged { .. }),
+            "{pr:?}"
+        );
+        assert!((pr.position + DVec3::X).length() < 1e-5, "{pr:?}");
+        // Out of reach: it stops on the ray at max_travel, inside, not converged.
+        let short = ProjectParams {
+            max_travel: 1.0,
+            ..params
+        };
+        let pr = project_point_oriented(&s, p, -DVec3::X, 0.0, &short);
+        assert_eq!(pr.outcome, ProjectionOutcome::NotConverged);
+        assert!((pr.position - DVec3::new(-0.5, 0.0, 0.0)).length() < 1e-12);
+        assert!(pr.value > 0.0);
+        // Outside (F < 0) with the sheet facing −x: the surface receded from the vertex,
+        // which must move inward (+x); Newton does, and its result is kept as it is.
+        let q = DVec3::new(-1.5, 0.0, 0.0);
+        assert_eq!(
+            project_point_oriented(&s, q, -DVec3::X, 0.0, &params),
+            project_point(&s, q, 0.0, &params)
+        );
+        // A consistent case and an unknown orientation are plain Newton.
+        assert_eq!(project_point_oriented(&s, p, DVec3::X, 0.0, &params), plain);
+        assert_eq!(
+            project_point_oriented(&s, p, DVec3::ZERO, 0.0, &params),
+            plain
+        );
     }
 
     #[test]

@@ -32,10 +32,27 @@ fn run(anim: &scenes::Animation, tol: f64) -> Vec<usize> {
             r.vertices,
             r.seconds * 1e3
         );
-        assert!(
-            worst < tol * anim.edge_length,
-            "frame {k}: |F|/|∇F| = {worst}"
-        );
+        // A vertex the re-projection could not place is one still in flight across a gap
+        // closing under it (its own sheet's ray meets no surface within reach, e.g. the
+        // wall of the channel the three blobs close at the centre): the tracker merges it
+        // a frame later. Those are reported, few, and gone by the end; every other vertex
+        // is on the surface.
+        if r.unprojected == 0 {
+            assert!(
+                worst < tol * anim.edge_length,
+                "frame {k}: |F|/|∇F| = {worst}"
+            );
+        } else {
+            assert!(r.unprojected * 100 <= r.vertices, "frame {k}: {r:?}");
+            assert!(
+                r.max_residual < tol * anim.edge_length,
+                "frame {k}: |F|/|∇F| = {}",
+                r.max_residual
+            );
+        }
+        if k == anim.frames {
+            assert_eq!(r.unprojected, 0, "frame {k}");
+        }
         comps.push(r.components);
     }
     comps
@@ -145,4 +162,46 @@ fn bad_parameters_are_typed_errors_not_panics() {
     assert!(f.advance_to(f64::NAN).is_err());
     // A failed frame leaves the mesh as it was.
     assert_eq!(f.time(), 0.0);
+}
+
+/// Regression (issue 16, item 5): the crossing at ℓ = 0.15 in 10 frames moves each
+/// surface about 1.5 ℓ per frame (3 ℓ relative), so at frame 4 the elements overlap
+/// deeply. Newton projection used to take the vertices of one element that had entered
+/// the other to the other's surface, moving them *inward*: the sheet folded onto the
+/// union's surface with its orientation reversed, the windings cancelled, the tracker's
+/// exact ray casting saw outside in the overlap and the material vanished (volume 1.81
+/// → 0.11 at frame 4, no surface left by frame 6). Every frame must now enclose about the
+/// field's volume, measured independently by polygonizing `F`.
+#[test]
+fn a_fast_deep_crossing_keeps_its_volume_in_every_frame() {
+    use implicit_surface::polygonize_mesh;
+    use mesh_core::Label;
+    use mesh_core::geometry::label_volumes;
+    let anim = scenes::crossing(1.1, 0.15, 10).unwrap();
+    let mut f = Follower::new(
+        anim.field.clone(),
+        anim.t0,
+        None,
+        FollowParams::new(anim.edge_length),
+    )
+    .unwrap();
+    let mut merged = false;
+    for k in 1..=anim.frames {
+        let t = anim.time(k, anim.frames);
+        let r = f.advance_to(t).unwrap_or_else(|e| panic!("frame {k}: {e}"));
+        assert!(r.tracker.events.vanished.is_empty(), "frame {k}: {r:?}");
+        merged |= r.components == 1;
+        let bounds = anim.field.bounds(t).unwrap();
+        let reference = polygonize_mesh(&anim.field, t, bounds, 0.05).unwrap();
+        let want = label_volumes(&reference)[&Label::new(1)];
+        let got = label_volumes(f.mesh())
+            .get(&Label::new(1))
+            .copied()
+            .unwrap_or(0.0);
+        assert!(
+            (got - want).abs() < 0.15 * want,
+            "frame {k} (t = {t}): volume {got}, field {want}"
+        );
+    }
+    assert!(merged, "the elements never merged");
 }

@@ -122,8 +122,9 @@ pub struct FixArgs {
     /// Output mesh (.ply or .obj).
     pub output: PathBuf,
     /// Grid cell size ℓ: overlaps and features smaller than ℓ are resolved by remeshing.
-    /// Default: the mean edge length of the input, or a quarter of the thinnest
-    /// material's 3·volume/area where that is smaller (the report says which).
+    /// Default: the mean edge length of the input, or an eighth of the thinnest
+    /// material's 3·volume/area where that is smaller, so every material is at least 8
+    /// cells thick (the report's cell_size_choice says which rule decided).
     #[arg(long)]
     pub cell: Option<f64>,
     /// Accept a repair that loses a material or volume: write it, with a warning on
