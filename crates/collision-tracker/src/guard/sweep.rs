@@ -30,6 +30,8 @@ type Near = ([u32; 3], [DVec3; 3]);
 #[derive(Debug, Default)]
 pub(crate) struct Scratch {
     candidates: Vec<TriId>,
+    /// The static rest near a whole edit, with boxes ([`gather_pool`]).
+    pool: Vec<(Near, Aabb)>,
     near: Vec<Near>,
     vertices: Vec<(u32, DVec3)>,
     edges: Vec<([u32; 2], [DVec3; 2])>,
@@ -47,22 +49,47 @@ fn gather(
     motion: &Motion,
     bounds: &Aabb,
 ) {
+    gather_pool(s, index, mesh, edit, motion, bounds);
+    select(s, bounds);
+}
+
+/// The static rest near `bounds` into `s.pool`, with each triangle's box: one index query
+/// for a whole edit, which [`select`] then narrows per swept triangle.
+fn gather_pool(
+    s: &mut Scratch,
+    index: &TriangleIndex,
+    mesh: &LabeledMesh,
+    edit: &Edit,
+    motion: &Motion,
+    bounds: &Aabb,
+) {
     s.candidates.clear();
     index.query(bounds, &mut s.candidates);
     s.candidates.sort_unstable();
     s.candidates.dedup();
-    s.near.clear();
-    s.vertices.clear();
-    s.edges.clear();
+    s.pool.clear();
     for &t in &s.candidates {
         if !mesh.is_triangle_alive(t) || edit.remove_tris.contains(&t) || motion.is_moved_kept(t) {
             continue;
         }
         let p = mesh.tri_positions(t);
-        if !Aabb::from_points(&p).overlaps(bounds) {
+        let b = Aabb::from_points(&p);
+        if b.overlaps(bounds) {
+            s.pool.push(((mesh.tri(t).map(|v| v.raw()), p), b));
+        }
+    }
+}
+
+/// The pooled triangles whose box overlaps `bounds` into `s.near`, with their distinct
+/// vertices and edges.
+fn select(s: &mut Scratch, bounds: &Aabb) {
+    s.near.clear();
+    s.vertices.clear();
+    s.edges.clear();
+    for &((key, p), b) in &s.pool {
+        if !b.overlaps(bounds) {
             continue;
         }
-        let key = mesh.tri(t).map(|v| v.raw());
         s.near.push((key, p));
         for k in 0..3 {
             s.vertices.push((key[k], p[k]));
@@ -77,6 +104,11 @@ fn gather(
     s.edges.dedup_by(|x, y| x.0 == y.0);
 }
 
+/// Swept triangles per edit up to which one index query with the box around them all
+/// serves every one of them (an edit's triangles are one neighbourhood); a larger edit
+/// queries per triangle, so that a spread-out one does not pool far more than it needs.
+const MAX_POOLED: usize = 64;
+
 const EDGES: [(usize, usize); 3] = [(0, 1), (1, 2), (2, 0)];
 
 /// CCD of the pseudo-motion, then the swept-tetrahedron test.
@@ -88,8 +120,20 @@ pub(crate) fn check_sweep(
     motion: &Motion,
     ccd: &CcdOptions,
 ) -> Result<(), Hit> {
+    let pooled = motion.swept.len() <= MAX_POOLED;
+    if pooled {
+        let all = motion
+            .swept
+            .iter()
+            .fold(Aabb::EMPTY, |u, t| u.union(t.bounds()));
+        gather_pool(s, index, mesh, edit, motion, &all);
+    }
     for (i, t) in motion.swept.iter().enumerate() {
-        gather(s, index, mesh, edit, motion, &t.bounds());
+        if pooled {
+            select(s, &t.bounds());
+        } else {
+            gather(s, index, mesh, edit, motion, &t.bounds());
+        }
         // Static vertices against the moving triangle.
         for &(k, p) in &s.vertices {
             if t.has(k) {
