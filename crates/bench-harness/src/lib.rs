@@ -16,6 +16,7 @@
 //! | [`ablate`] | research ablations: option variants × seeds, isolated, summarised per variant |
 //! | [`record`] | the JSON records (`run.json`, `robustness.json`, `compare.json`) and shard merging |
 //! | [`report`] | markdown tables, SVG plots and PNG pictures of frames |
+//! | [`slurm`] | `bench robustness --slurm DIR`: a job array of shards and a dependent merge job |
 //! | [`view`] | `surftrack view`: a self-contained WebGL page of runs' frames |
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
@@ -31,4 +32,5 @@ pub mod preservation;
 pub mod record;
 pub mod report;
 pub mod scenes;
+pub mod slurm;
 pub mod view;

@@ -312,6 +312,9 @@ Examples:
   # on a cluster, one shard per array task, then merge:
   surftrack bench robustness --spheres 100 --seeds 100 --shard $TASK/10 --out out/rb/shard-$TASK
   surftrack bench merge out/rb/shard-* --out out/rb/all
+  # or let surftrack write the Slurm job array and the dependent merge job:
+  surftrack bench robustness --spheres 100 --seeds 100 --slurm out/rb-slurm --slurm-shards 10 --out out/rb
+  sh out/rb-slurm/submit.sh        # merged table: out/rb/robustness.json
 
 Output (in --out): robustness.json (schema surftrack.robustness/1: config, runs, summary
 per tracker with runs, successes, success_rate, mean/median/max_seconds), report.md,
@@ -372,6 +375,13 @@ pub struct RobustnessArgs {
     /// --every asks).
     #[arg(long)]
     pub no_pictures: bool,
+    /// Write Slurm scripts into DIR instead of running: a job array (one shard per task,
+    /// each into OUT/shard-I), a merge job depending on it, and submit.sh to submit both.
+    #[arg(long, value_name = "DIR", conflicts_with = "shard")]
+    pub slurm: Option<PathBuf>,
+    /// Array tasks (shards) of the --slurm scripts (default: one per seed).
+    #[arg(long, value_name = "N", requires = "slurm")]
+    pub slurm_shards: Option<usize>,
     /// Test hook passed to every child (hang, panic).
     #[arg(long, hide = true)]
     pub simulate: Option<Simulate>,
