@@ -50,7 +50,14 @@ fn a_hundred_bubbles_keep_their_volumes_within_one_percent_over_ten_steps() {
         let drift = v["relative_drift"].as_f64().unwrap();
         assert!(drift.abs() < 0.01, "bubble {}: drift {drift}", v["label"]);
     }
-    // The surface did move: mean curvature flow acted (the tracker remeshed after it).
     let steps = record["per_step"].as_array().unwrap();
     assert!(steps.iter().all(|s| s["valid"] == true));
+    // Every record carries the run's peak memory, also per million triangles (Linux).
+    if cfg!(target_os = "linux") {
+        let mib = record["peak_rss_mib"].as_f64().unwrap();
+        let per_million = record["mib_per_million_triangles"].as_f64().unwrap();
+        let triangles = record["peak_triangles"].as_f64().unwrap();
+        assert!(mib > 1.0, "{mib}");
+        assert!((per_million - mib / (triangles / 1e6)).abs() < 1e-6 * per_million);
+    }
 }

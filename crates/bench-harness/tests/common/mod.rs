@@ -39,7 +39,13 @@ pub fn text(bytes: &[u8]) -> String {
 pub fn without_times(record: &Value) -> Value {
     let mut r = record.clone();
     for run in r["runs"].as_array_mut().unwrap() {
-        for key in ["wall_seconds", "step_seconds", "stage_seconds"] {
+        for key in [
+            "wall_seconds",
+            "step_seconds",
+            "stage_seconds",
+            "peak_rss_mib",
+            "mib_per_million_triangles",
+        ] {
             run[key] = Value::Null;
         }
         if let Some(f) = run.get_mut("failure").and_then(|f| f.as_object_mut()) {
@@ -52,6 +58,8 @@ pub fn without_times(record: &Value) -> Value {
             "median_seconds",
             "max_seconds",
             "mean_stage_seconds",
+            "max_peak_rss_mib",
+            "max_mib_per_million_triangles",
         ] {
             s[key] = Value::Null;
         }
