@@ -142,6 +142,72 @@ pub fn read_run_record(dir: &Path) -> Option<RunRecord> {
     serde_json::from_str(&text).ok()
 }
 
+/// How a child started by [`run_watched`] ended.
+#[derive(Debug)]
+pub enum WatchedEnding {
+    /// It exited by itself, with this code (`None`: killed by a signal).
+    Exited(Option<i32>),
+    /// The watchdog killed it (time-out or memory cap), with what it said.
+    Killed(FailureReason, String),
+    /// It could not be started or waited for.
+    Failed(String),
+}
+
+/// A child run under the watchdog, for commands other than `run` (the scaling
+/// benchmark's `fix` children).
+#[derive(Debug)]
+pub struct Watched {
+    /// How it ended.
+    pub ending: WatchedEnding,
+    /// Wall time, seconds.
+    pub wall_seconds: f64,
+    /// Largest resident set the watchdog sampled, bytes (0 where unknown).
+    pub sampled_peak_rss_bytes: u64,
+}
+
+/// Runs `exe args…` with stdout into `stdout` and stderr into `log`, under `limits`.
+pub fn run_watched(
+    exe: &Path,
+    args: &[OsString],
+    stdout: &Path,
+    log: &Path,
+    limits: &Limits,
+) -> Watched {
+    let start = Instant::now();
+    let done = |ending, peak| Watched {
+        ending,
+        wall_seconds: start.elapsed().as_secs_f64(),
+        sampled_peak_rss_bytes: peak,
+    };
+    let open = |path: &Path| {
+        std::fs::File::create(path).map_err(|e| format!("cannot create {}: {e}", path.display()))
+    };
+    let (out, err) = match (open(stdout), open(log)) {
+        (Ok(o), Ok(e)) => (o, e),
+        (Err(m), _) | (_, Err(m)) => return done(WatchedEnding::Failed(m), 0),
+    };
+    let spawned = Command::new(exe)
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::from(out))
+        .stderr(Stdio::from(err))
+        .spawn();
+    let mut child = match spawned {
+        Ok(child) => child,
+        Err(e) => {
+            let message = format!("cannot start {}: {e}", exe.display());
+            return done(WatchedEnding::Failed(message), 0);
+        }
+    };
+    let mut peak = 0;
+    let ending = match watch(&mut child, limits, &mut peak) {
+        Ok(Ending::Exited(status)) => WatchedEnding::Exited(status.code()),
+        Ok(Ending::Killed(reason, message)) => WatchedEnding::Killed(reason, message),
+        Err(e) => WatchedEnding::Failed(format!("waiting for the child: {e}")),
+    };
+    done(ending, peak)
+}
+
 /// Runs `run` in a child of `exe` under `limits` and summarises it. Never fails: a child
 /// that cannot even be started is a failed run (`crash`) with the reason in its message.
 pub fn run_isolated(exe: &Path, run: &ChildRun, limits: &Limits) -> RunSummary {

@@ -20,6 +20,7 @@ mod generate;
 mod implicit;
 mod output;
 mod run;
+mod scaling;
 mod scenes;
 mod validate;
 mod view;
@@ -107,7 +108,8 @@ Examples:
   surftrack fix out/copies.ply out/union.ply --json
   surftrack fix scan.obj scan_fixed.ply --cell 0.01
 
---json prints a record (schema surftrack.fix/1): input, output, valid, and the report:
+--json prints a record (schema surftrack.fix/1): input, output, valid, peak_rss_mib, and
+the report:
 stages [{stage, seconds}], cell_size, triangles_in, triangles_out, untouched_fraction,
 flawed_cells, safety_rounds, subcell_rounds, subcell_pairs, improve_edits, validation,
 cell_size_choice {cell_size, rule, thinnest, reason}, clean_input, volumes [{label,
@@ -303,6 +305,9 @@ pub enum BenchCommand {
     /// An animated implicit surface (metaballs) followed by the grid tracker vs marching
     /// tetrahedra from scratch every frame: ms per frame, triangles, temporal coherence.
     Implicit(implicit::ImplicitArgs),
+    /// Time and peak memory against size: `fix` on rotated copies from 100k to millions
+    /// of triangles, and steps on sphere sets of increasing size; log–log slopes, plots.
+    Scaling(scaling::ScalingArgs),
 }
 
 const ROBUSTNESS_EXAMPLES: &str = "\
@@ -639,6 +644,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             BenchCommand::Compare(args) => bench::compare(&args),
             BenchCommand::Ablate(args) => ablate::run(&args),
             BenchCommand::Implicit(args) => implicit::run(&args),
+            BenchCommand::Scaling(args) => scaling::run(&args),
         },
         Command::Scenes(args) => scenes::run(&args),
         Command::Fix(args) => fix::run(&args),

@@ -5,6 +5,7 @@
 
 pub mod ablate;
 pub mod picture;
+pub mod scaling;
 pub mod svg;
 
 use std::fmt::Write;
