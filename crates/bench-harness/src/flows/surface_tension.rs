@@ -316,7 +316,8 @@ fn solve_pressures(sys: &PressureSystem<'_>, rhs: &[f64], disp: &mut [DVec3]) ->
         sys.displacements(&p, disp);
         sys.volume_change(disp, &mut ap);
         let pap: f64 = p.iter().zip(&ap).map(|(a, b)| a * b).sum();
-        if !(pap > 0.0) {
+        // Zero or NaN curvature: the search direction is in the null space; stop.
+        if pap.is_nan() || pap <= 0.0 {
             break;
         }
         let alpha = rz / pap;
