@@ -91,8 +91,17 @@ export SLURM_CONF=$ETC/slurm.conf
 STARTED_MUNGE=""
 cleanup() {
   set +e
+  pids=""
   for pidfile in "$VAR/slurmd.pid" "$VAR/slurmctld.pid"; do
-    [ -s "$pidfile" ] && kill "$(cat "$pidfile")" 2>/dev/null
+    [ -s "$pidfile" ] && pids="$pids $(cat "$pidfile")"
+  done
+  [ -n "$pids" ] && kill $pids 2>/dev/null
+  # Wait (at most 15 s) until they are gone, so nothing outlives the check.
+  for _ in $(seq 30); do
+    alive=""
+    for pid in $pids; do kill -0 "$pid" 2>/dev/null && alive=yes; done
+    [ -z "$alive" ] && break
+    sleep 0.5
   done
   if [ -n "$STARTED_MUNGE" ] && [ -s /run/munge/munged.pid ]; then
     kill "$(cat /run/munge/munged.pid)" 2>/dev/null
@@ -165,7 +174,7 @@ import json, sys
 whole_path, merged_path, shards, sharded = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4]
 TIMES = {"wall_seconds", "step_seconds", "stage_seconds", "mean_seconds", "median_seconds",
          "max_seconds", "mean_stage_seconds", "peak_rss_mib", "mib_per_million_triangles",
-         "max_peak_rss_mib"}
+         "max_peak_rss_mib", "max_mib_per_million_triangles"}
 def strip(v):
     if isinstance(v, dict):
         out = {k: strip(x) for k, x in v.items() if k not in TIMES}

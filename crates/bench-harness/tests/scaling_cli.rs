@@ -34,7 +34,10 @@ fn scaling_runs_fix_and_step_points_and_fits_slopes() {
     let fix = record["fix"].as_array().unwrap();
     assert_eq!(fix.len(), 2);
     // Smallest first, and the input sizes follow the request.
-    let sizes: Vec<u64> = fix.iter().map(|p| p["triangles_in"].as_u64().unwrap()).collect();
+    let sizes: Vec<u64> = fix
+        .iter()
+        .map(|p| p["triangles_in"].as_u64().unwrap())
+        .collect();
     assert!(sizes[0] < sizes[1], "{sizes:?}");
     for (p, target) in fix.iter().zip([1500.0, 4000.0]) {
         assert_eq!(p["success"], true, "{p}");
