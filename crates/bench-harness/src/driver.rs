@@ -218,6 +218,8 @@ pub fn run_scene_with(
         volumes: Vec::new(),
         preservation: None,
         final_digest: None,
+        peak_rss_mib: None,
+        mib_per_million_triangles: None,
     };
     let initial_mesh = scene.mesh.clone();
     let _span =

@@ -63,15 +63,24 @@ enum Ending {
 /// Resident set size of a process, from `/proc/<pid>/status` (`VmRSS: <n> kB`); `None`
 /// where there is no such file (not Linux, or the process is gone).
 fn resident_bytes(pid: u32) -> Option<u64> {
-    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmRSS:"))?;
-    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib * 1024)
+    status_kib(&format!("/proc/{pid}/status"), "VmRSS:").map(|kib| kib * 1024)
+}
+
+/// Peak resident set of this process (`VmHWM` in `/proc/self/status`); `None` where
+/// there is no such file.
+pub fn own_peak_resident_bytes() -> Option<u64> {
+    status_kib("/proc/self/status", "VmHWM:").map(|kib| kib * 1024)
+}
+
+fn status_kib(path: &str, key: &str) -> Option<u64> {
+    let status = std::fs::read_to_string(path).ok()?;
+    let line = status.lines().find(|l| l.starts_with(key))?;
+    line.split_whitespace().nth(1)?.parse().ok()
 }
 
 /// Waits for the child within the limits, killing it when one is exceeded. The loop is
 /// bounded by the time limit (plus one poll).
-fn watch(child: &mut Child, limits: &Limits) -> Result<Ending, std::io::Error> {
+fn watch(child: &mut Child, limits: &Limits, peak: &mut u64) -> Result<Ending, std::io::Error> {
     let start = Instant::now();
     loop {
         if let Some(status) = child.try_wait()? {
@@ -84,8 +93,10 @@ fn watch(child: &mut Child, limits: &Limits) -> Result<Ending, std::io::Error> {
                 format!("killed after {:.1} s (time limit)", elapsed.as_secs_f64()),
             ))
         } else {
+            let rss = resident_bytes(child.id());
+            *peak = (*peak).max(rss.unwrap_or(0));
             limits.max_rss_bytes.and_then(|cap| {
-                let rss = resident_bytes(child.id())?;
+                let rss = rss?;
                 (rss > cap).then(|| {
                     (
                         FailureReason::Memory,
@@ -129,6 +140,72 @@ fn signal_description(status: &ExitStatus) -> String {
 pub fn read_run_record(dir: &Path) -> Option<RunRecord> {
     let text = std::fs::read_to_string(dir.join("run.json")).ok()?;
     serde_json::from_str(&text).ok()
+}
+
+/// How a child started by [`run_watched`] ended.
+#[derive(Debug)]
+pub enum WatchedEnding {
+    /// It exited by itself, with this code (`None`: killed by a signal).
+    Exited(Option<i32>),
+    /// The watchdog killed it (time-out or memory cap), with what it said.
+    Killed(FailureReason, String),
+    /// It could not be started or waited for.
+    Failed(String),
+}
+
+/// A child run under the watchdog, for commands other than `run` (the scaling
+/// benchmark's `fix` children).
+#[derive(Debug)]
+pub struct Watched {
+    /// How it ended.
+    pub ending: WatchedEnding,
+    /// Wall time, seconds.
+    pub wall_seconds: f64,
+    /// Largest resident set the watchdog sampled, bytes (0 where unknown).
+    pub sampled_peak_rss_bytes: u64,
+}
+
+/// Runs `exe args…` with stdout into `stdout` and stderr into `log`, under `limits`.
+pub fn run_watched(
+    exe: &Path,
+    args: &[OsString],
+    stdout: &Path,
+    log: &Path,
+    limits: &Limits,
+) -> Watched {
+    let start = Instant::now();
+    let done = |ending, peak| Watched {
+        ending,
+        wall_seconds: start.elapsed().as_secs_f64(),
+        sampled_peak_rss_bytes: peak,
+    };
+    let open = |path: &Path| {
+        std::fs::File::create(path).map_err(|e| format!("cannot create {}: {e}", path.display()))
+    };
+    let (out, err) = match (open(stdout), open(log)) {
+        (Ok(o), Ok(e)) => (o, e),
+        (Err(m), _) | (_, Err(m)) => return done(WatchedEnding::Failed(m), 0),
+    };
+    let spawned = Command::new(exe)
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::from(out))
+        .stderr(Stdio::from(err))
+        .spawn();
+    let mut child = match spawned {
+        Ok(child) => child,
+        Err(e) => {
+            let message = format!("cannot start {}: {e}", exe.display());
+            return done(WatchedEnding::Failed(message), 0);
+        }
+    };
+    let mut peak = 0;
+    let ending = match watch(&mut child, limits, &mut peak) {
+        Ok(Ending::Exited(status)) => WatchedEnding::Exited(status.code()),
+        Ok(Ending::Killed(reason, message)) => WatchedEnding::Killed(reason, message),
+        Err(e) => WatchedEnding::Failed(format!("waiting for the child: {e}")),
+    };
+    done(ending, peak)
 }
 
 /// Runs `run` in a child of `exe` under `limits` and summarises it. Never fails: a child
@@ -185,14 +262,18 @@ pub fn run_isolated(exe: &Path, run: &ChildRun, limits: &Limits) -> RunSummary {
             );
         }
     };
-    let ending = watch(&mut child, limits);
+    let mut peak = 0;
+    let ending = watch(&mut child, limits, &mut peak);
+    let watched_mib = (peak > 0).then(|| crate::record::bytes_to_mib(peak));
     let wall = start.elapsed().as_secs_f64();
     let see_log = format!("see {}", log_path.display());
     match ending {
         Err(e) => failed(FailureReason::Crash, format!("waiting for the child: {e}")),
         Ok(Ending::Killed(reason, message)) => {
             warn!(tracker = %run.tracker, seed = run.seed, "{message}");
-            failed(reason, format!("{message}; {see_log}"))
+            let mut summary = failed(reason, format!("{message}; {see_log}"));
+            summary.peak_rss_mib = watched_mib;
+            summary
         }
         Ok(Ending::Exited(status)) => match read_run_record(&run.dir) {
             Some(record) => RunSummary::from_record(&record, wall),

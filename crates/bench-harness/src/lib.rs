@@ -16,6 +16,8 @@
 //! | [`ablate`] | research ablations: option variants × seeds, isolated, summarised per variant |
 //! | [`record`] | the JSON records (`run.json`, `robustness.json`, `compare.json`) and shard merging |
 //! | [`report`] | markdown tables, SVG plots and PNG pictures of frames |
+//! | [`scaling`] | `bench scaling`: time and peak memory against size, `fix` and steps, log–log slopes |
+//! | [`slurm`] | `bench robustness --slurm DIR`: a job array of shards and a dependent merge job |
 //! | [`view`] | `surftrack view`: a self-contained WebGL page of runs' frames |
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
@@ -30,5 +32,7 @@ pub mod options;
 pub mod preservation;
 pub mod record;
 pub mod report;
+pub mod scaling;
 pub mod scenes;
+pub mod slurm;
 pub mod view;

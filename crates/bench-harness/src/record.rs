@@ -29,6 +29,8 @@
 //! | `volumes` | array | `[{"label", "initial", "last", "relative_drift"}]` per material |
 //! | `preservation` | object | untouched triangles and feature distance ([`Preservation`]) |
 //! | `final_digest` | string | digest of the final mesh (equal digests: the same mesh) |
+//! | `peak_rss_mib` | number or null | peak resident memory of the process (Linux `VmHWM`), MiB |
+//! | `mib_per_million_triangles` | number or null | `peak_rss_mib` per million `peak_triangles` |
 //!
 //! A [`StepRecord`] holds `step` (1-based), `t` (time at the start of the step), `dt`,
 //! `seconds` (wall time of proposal + advance), `stages`, `triangles`, `vertices`,
@@ -326,6 +328,34 @@ pub struct RunRecord {
     /// two runs with equal digests produced the same mesh.
     #[serde(default)]
     pub final_digest: Option<String>,
+    /// Peak resident memory of the process that ran it, MiB (Linux `VmHWM`; `None`
+    /// elsewhere). Scene building included: it is the figure a cluster's memory limit
+    /// sees.
+    #[serde(default)]
+    pub peak_rss_mib: Option<f64>,
+    /// `peak_rss_mib` per million `peak_triangles`: comparable across sizes.
+    #[serde(default)]
+    pub mib_per_million_triangles: Option<f64>,
+}
+
+impl RunRecord {
+    /// Fills the memory fields from this process's peak resident set.
+    pub fn record_memory(&mut self) {
+        self.peak_rss_mib = crate::isolate::own_peak_resident_bytes().map(bytes_to_mib);
+        self.mib_per_million_triangles =
+            per_million_triangles(self.peak_rss_mib, self.peak_triangles);
+    }
+}
+
+/// Bytes as MiB.
+pub fn bytes_to_mib(bytes: u64) -> f64 {
+    bytes as f64 / (1u64 << 20) as f64
+}
+
+/// MiB per million triangles, when both are known and the mesh is not empty.
+pub fn per_million_triangles(mib: Option<f64>, triangles: usize) -> Option<f64> {
+    mib.filter(|_| triangles > 0)
+        .map(|m| m / (triangles as f64 / 1e6))
 }
 
 /// Scene parameters as given (`None`: the scene's default), for replays.
@@ -405,6 +435,13 @@ pub struct RunSummary {
     pub step_seconds: Vec<f64>,
     /// Triangles after every finished step (for the plots).
     pub step_triangles: Vec<usize>,
+    /// Peak resident memory, MiB: the child's own `VmHWM`, or for a run killed before it
+    /// wrote a record the largest resident set the watchdog saw.
+    #[serde(default)]
+    pub peak_rss_mib: Option<f64>,
+    /// `peak_rss_mib` per million `peak_triangles`.
+    #[serde(default)]
+    pub mib_per_million_triangles: Option<f64>,
 }
 
 impl RunSummary {
@@ -431,6 +468,8 @@ impl RunSummary {
             stage_seconds: record.stage_seconds.clone(),
             step_seconds: record.per_step.iter().map(|s| s.seconds).collect(),
             step_triangles: record.per_step.iter().map(|s| s.triangles).collect(),
+            peak_rss_mib: record.peak_rss_mib,
+            mib_per_million_triangles: record.mib_per_million_triangles,
         }
     }
 
@@ -449,6 +488,8 @@ impl RunSummary {
             stage_seconds: Vec::new(),
             step_seconds: Vec::new(),
             step_triangles: Vec::new(),
+            peak_rss_mib: None,
+            mib_per_million_triangles: None,
         }
     }
 }
@@ -478,6 +519,12 @@ pub struct BackendSummary {
     pub mean_topology_changes: Option<f64>,
     /// Largest peak triangle count over all runs.
     pub peak_triangles: usize,
+    /// Largest peak resident memory over all runs, MiB.
+    #[serde(default)]
+    pub max_peak_rss_mib: Option<f64>,
+    /// Largest MiB per million triangles over all runs.
+    #[serde(default)]
+    pub max_mib_per_million_triangles: Option<f64>,
 }
 
 impl BackendSummary {
@@ -495,12 +542,23 @@ impl BackendSummary {
             mean_stage_seconds: Vec::new(),
             mean_topology_changes: None,
             peak_triangles: 0,
+            max_peak_rss_mib: None,
+            max_mib_per_million_triangles: None,
+        };
+        let max = |a: Option<f64>, b: Option<f64>| match (a, b) {
+            (Some(x), Some(y)) => Some(x.max(y)),
+            (x, y) => x.or(y),
         };
         let mut times = Vec::new();
         let mut changes = 0u64;
         for run in runs {
             summary.runs += 1;
             summary.peak_triangles = summary.peak_triangles.max(run.peak_triangles);
+            summary.max_peak_rss_mib = max(summary.max_peak_rss_mib, run.peak_rss_mib);
+            summary.max_mib_per_million_triangles = max(
+                summary.max_mib_per_million_triangles,
+                run.mib_per_million_triangles,
+            );
             if run.success {
                 summary.successes += 1;
                 times.push(run.wall_seconds);
@@ -709,6 +767,9 @@ pub(crate) mod tests {
             steps_completed: 3,
             initial_triangles: 90,
             peak_triangles: 100 + seed as usize,
+            peak_rss_mib: Some(50.0 + seed as f64),
+            // Exactly representable: the round-trip test compares bit for bit.
+            mib_per_million_triangles: Some(500.0 + seed as f64),
             events: EventCounts {
                 merges: seed,
                 ..EventCounts::default()
@@ -760,6 +821,10 @@ pub(crate) mod tests {
         assert_eq!(s.mean_stage_seconds[0].stage, "cut");
         assert_eq!(s.mean_stage_seconds[0].seconds, 0.5);
         assert_eq!(s.peak_triangles, 107);
+        assert_eq!(s.max_peak_rss_mib, Some(57.0));
+        assert_eq!(s.max_mib_per_million_triangles, Some(507.0));
+        assert_eq!(per_million_triangles(Some(3.0), 2_000_000), Some(1.5));
+        assert_eq!(per_million_triangles(Some(3.0), 0), None);
         let none = BackendSummary::of_runs("grid", &[]);
         assert_eq!(
             (none.runs, none.success_rate, none.mean_seconds),

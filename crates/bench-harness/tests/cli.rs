@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 
 use serde_json::Value;
 
-use common::{json, surftrack, text};
+use common::{json, surftrack, text, without_times};
 
 /// Reasons of every run in a robustness record, in record order.
 fn reasons(record: &Value) -> Vec<(String, u64, String)> {
@@ -216,30 +216,6 @@ fn children_that_panic_are_recorded_and_the_report_is_written() {
     // Each child left its log, with the panic message in it.
     let log = std::fs::read_to_string(dir.path().join("rb/runs/grid-seed-0001/child.log")).unwrap();
     assert!(log.contains("simulated panic"), "{log}");
-}
-
-/// Everything of a robustness record that does not depend on timing.
-fn without_times(record: &Value) -> Value {
-    let mut r = record.clone();
-    for run in r["runs"].as_array_mut().unwrap() {
-        for key in ["wall_seconds", "step_seconds", "stage_seconds"] {
-            run[key] = Value::Null;
-        }
-        if let Some(f) = run.get_mut("failure").and_then(|f| f.as_object_mut()) {
-            f.remove("message"); // names the run directory
-        }
-    }
-    for s in r["summary"].as_array_mut().unwrap() {
-        for key in [
-            "mean_seconds",
-            "median_seconds",
-            "max_seconds",
-            "mean_stage_seconds",
-        ] {
-            s[key] = Value::Null;
-        }
-    }
-    r
 }
 
 #[test]

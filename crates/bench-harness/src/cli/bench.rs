@@ -103,6 +103,9 @@ pub(super) fn robustness(args: &RobustnessArgs) -> anyhow::Result<ExitCode> {
         bail!("--timeout must be a positive number of seconds");
     }
     let backends = backends(&args.tracker);
+    if let Some(dir) = &args.slurm {
+        return write_slurm(args, dir, &backends);
+    }
     let out = args.out.clone().unwrap_or_else(|| match args.shard {
         Some(s) => PathBuf::from(format!("out/robustness/shard-{}", s.index)),
         None => PathBuf::from("out/robustness"),
@@ -156,6 +159,88 @@ pub(super) fn robustness(args: &RobustnessArgs) -> anyhow::Result<ExitCode> {
         super::view::bench_pictures(&runs, &out)
     };
     publish(&record, &out, args.json, &pictures)?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The `bench robustness` arguments that every array task repeats: everything that
+/// defines the sweep, none of `--shard`, `--out`, `--slurm`, `--json`, `--quiet`.
+pub(super) fn task_arguments(args: &RobustnessArgs, backends: &[Backend]) -> Vec<String> {
+    let mut a: Vec<String> = vec![
+        "--spheres".into(),
+        args.spheres.to_string(),
+        "--seeds".into(),
+        args.seeds.to_string(),
+        "--first-seed".into(),
+        args.first_seed.to_string(),
+        "--tracker".into(),
+        backends
+            .iter()
+            .map(|b| b.name())
+            .collect::<Vec<_>>()
+            .join(","),
+        "--steps".into(),
+        args.steps.to_string(),
+        "--timeout".into(),
+        args.timeout.to_string(),
+        "--jobs".into(),
+        args.jobs.to_string(),
+        "--max-triangles".into(),
+        args.max_triangles.to_string(),
+        "--max-memory-mib".into(),
+        args.max_memory_mib.to_string(),
+        "--every".into(),
+        args.every.to_string(),
+    ];
+    if args.no_pictures {
+        a.push("--no-pictures".into());
+    }
+    if let Some(sim) = args.simulate {
+        a.extend(["--simulate".into(), sim.name().into()]);
+    }
+    a
+}
+
+/// An absolute form of a path that may not exist yet (relative to the working directory).
+fn absolute(path: &Path) -> anyhow::Result<PathBuf> {
+    std::path::absolute(path).with_context(|| format!("cannot make {} absolute", path.display()))
+}
+
+/// `--slurm DIR`: writes the job-array, merge and submit scripts instead of running.
+fn write_slurm(
+    args: &RobustnessArgs,
+    dir: &Path,
+    backends: &[Backend],
+) -> anyhow::Result<ExitCode> {
+    use crate::slurm::{SUBMIT_SCRIPT, SlurmPlan, write_slurm_scripts};
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("out/robustness"));
+    let plan = SlurmPlan {
+        exe: current_exe()?,
+        dir: absolute(dir)?,
+        out: absolute(&out)?,
+        shards: args.slurm_shards.unwrap_or(args.seeds),
+        bench_args: task_arguments(args, backends),
+        seeds: args.seeds,
+        trackers: backends.len(),
+        jobs: args.jobs.max(1),
+        run_timeout_seconds: args.timeout,
+        child_memory_mib: args.max_memory_mib,
+        job_name: format!("surftrack-rb-{}", args.spheres),
+    };
+    let written = write_slurm_scripts(&plan)?;
+    if !args.quiet {
+        for path in &written {
+            println!("wrote {}", path.display());
+        }
+        println!(
+            "submit with: sh {}
+merged table (after the merge job): {}",
+            plan.dir.join(SUBMIT_SCRIPT).display(),
+            plan.out.join("robustness.json").display()
+        );
+    }
     Ok(ExitCode::SUCCESS)
 }
 

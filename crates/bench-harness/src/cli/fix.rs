@@ -19,6 +19,9 @@ struct FixRecord<'a> {
     input: String,
     output: String,
     valid: bool,
+    /// Peak resident memory of the process, MiB (Linux `VmHWM`), reading and writing the
+    /// files included.
+    peak_rss_mib: Option<f64>,
     report: &'a grid_tracker::FixReport,
 }
 
@@ -54,6 +57,8 @@ pub(super) fn run(args: &FixArgs) -> anyhow::Result<ExitCode> {
             input: args.input.display().to_string(),
             output: args.output.display().to_string(),
             valid,
+            peak_rss_mib: crate::isolate::own_peak_resident_bytes()
+                .map(crate::record::bytes_to_mib),
             report,
         };
         println!("{}", serde_json::to_string_pretty(&record)?);

@@ -20,6 +20,7 @@ mod generate;
 mod implicit;
 mod output;
 mod run;
+mod scaling;
 mod scenes;
 mod validate;
 mod view;
@@ -107,7 +108,8 @@ Examples:
   surftrack fix out/copies.ply out/union.ply --json
   surftrack fix scan.obj scan_fixed.ply --cell 0.01
 
---json prints a record (schema surftrack.fix/1): input, output, valid, and the report:
+--json prints a record (schema surftrack.fix/1): input, output, valid, peak_rss_mib, and
+the report:
 stages [{stage, seconds}], cell_size, triangles_in, triangles_out, untouched_fraction,
 flawed_cells, safety_rounds, subcell_rounds, subcell_pairs, improve_edits, validation,
 cell_size_choice {cell_size, rule, thinnest, reason}, clean_input, volumes [{label,
@@ -304,6 +306,9 @@ pub enum BenchCommand {
     /// An animated implicit surface (metaballs) followed by the grid tracker vs marching
     /// tetrahedra from scratch every frame: ms per frame, triangles, temporal coherence.
     Implicit(implicit::ImplicitArgs),
+    /// Time and peak memory against size: `fix` on rotated copies from 100k to millions
+    /// of triangles, and steps on sphere sets of increasing size; log–log slopes, plots.
+    Scaling(scaling::ScalingArgs),
 }
 
 const ROBUSTNESS_EXAMPLES: &str = "\
@@ -313,6 +318,9 @@ Examples:
   # on a cluster, one shard per array task, then merge:
   surftrack bench robustness --spheres 100 --seeds 100 --shard $TASK/10 --out out/rb/shard-$TASK
   surftrack bench merge out/rb/shard-* --out out/rb/all
+  # or let surftrack write the Slurm job array and the dependent merge job:
+  surftrack bench robustness --spheres 100 --seeds 100 --slurm out/rb-slurm --slurm-shards 10 --out out/rb
+  sh out/rb-slurm/submit.sh        # merged table: out/rb/robustness.json
 
 Output (in --out): robustness.json (schema surftrack.robustness/1: config, runs, summary
 per tracker with runs, successes, success_rate, mean/median/max_seconds), report.md,
@@ -373,6 +381,13 @@ pub struct RobustnessArgs {
     /// --every asks).
     #[arg(long)]
     pub no_pictures: bool,
+    /// Write Slurm scripts into DIR instead of running: a job array (one shard per task,
+    /// each into OUT/shard-I), a merge job depending on it, and submit.sh to submit both.
+    #[arg(long, value_name = "DIR", conflicts_with = "shard")]
+    pub slurm: Option<PathBuf>,
+    /// Array tasks (shards) of the --slurm scripts (default: one per seed).
+    #[arg(long, value_name = "N", requires = "slurm")]
+    pub slurm_shards: Option<usize>,
     /// Test hook passed to every child (hang, panic).
     #[arg(long, hide = true)]
     pub simulate: Option<Simulate>,
@@ -630,6 +645,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             BenchCommand::Compare(args) => bench::compare(&args),
             BenchCommand::Ablate(args) => ablate::run(&args),
             BenchCommand::Implicit(args) => implicit::run(&args),
+            BenchCommand::Scaling(args) => scaling::run(&args),
         },
         Command::Scenes(args) => scenes::run(&args),
         Command::Fix(args) => fix::run(&args),

@@ -204,7 +204,8 @@ pub(super) fn run(args: &RunArgs) -> anyhow::Result<ExitCode> {
         },
     };
     let progress = output::progress_bar(args.quiet || args.json, 0, &plan.scene);
-    let record = run_scene(&config, &progress)?;
+    let mut record = run_scene(&config, &progress)?;
+    record.record_memory();
     progress.finish_and_clear();
     let record_path = write_record(&out, &record)?;
     if !record.per_step.is_empty() {

@@ -40,6 +40,7 @@ pub mod one_shot;
 pub mod rigid;
 pub mod schedule;
 pub mod speeds;
+pub mod surface_tension;
 #[cfg(test)]
 mod test_meshes;
 
@@ -57,6 +58,7 @@ pub use one_shot::{OneShot, TargetPositions};
 pub use rigid::RigidRotation;
 pub use schedule::Schedule;
 pub use speeds::InterfaceSpeeds;
+pub use surface_tension::VolumePreservingTension;
 
 /// Something that proposes the next position of every vertex.
 ///

@@ -5,6 +5,7 @@
 
 pub mod ablate;
 pub mod picture;
+pub mod scaling;
 pub mod svg;
 
 use std::fmt::Write;
@@ -25,13 +26,19 @@ fn seconds(x: Option<f64>) -> String {
     }
 }
 
-/// The per-backend table of the robustness benchmark (what the paper reports).
+/// A MiB figure, or a dash where unknown.
+fn mib(v: Option<f64>) -> String {
+    v.map_or_else(|| "–".to_string(), |m| format!("{m:.0}"))
+}
+
+/// The per-backend table of the robustness benchmark (what the paper reports), with the
+/// memory figures of the runs.
 pub fn robustness_table(record: &RobustnessRecord) -> String {
     let mut md = String::new();
     md.push_str(
-        "| tracker | runs | successes | success rate | mean s | median s | max s | failures |\n",
+        "| tracker | runs | successes | success rate | mean s | median s | max s | peak triangles | peak MiB | MiB per M triangles | failures |\n",
     );
-    md.push_str("|---|---:|---:|---:|---:|---:|---:|---|\n");
+    md.push_str("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n");
     for s in &record.summary {
         let failures = if s.failures.is_empty() {
             "–".to_string()
@@ -44,7 +51,7 @@ pub fn robustness_table(record: &RobustnessRecord) -> String {
         };
         let _ = writeln!(
             md,
-            "| {} | {} | {} | {:.1} % | {} | {} | {} | {} |",
+            "| {} | {} | {} | {:.1} % | {} | {} | {} | {} | {} | {} | {} |",
             s.tracker,
             s.runs,
             s.successes,
@@ -52,6 +59,9 @@ pub fn robustness_table(record: &RobustnessRecord) -> String {
             seconds(s.mean_seconds),
             seconds(s.median_seconds),
             seconds(s.max_seconds),
+            s.peak_triangles,
+            mib(s.max_peak_rss_mib),
+            mib(s.max_mib_per_million_triangles),
             failures
         );
     }

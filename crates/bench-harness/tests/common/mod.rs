@@ -34,3 +34,35 @@ pub fn json(path: &Path) -> Value {
 pub fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()
 }
+
+/// Everything of a robustness record that does not depend on timing or memory.
+pub fn without_times(record: &Value) -> Value {
+    let mut r = record.clone();
+    for run in r["runs"].as_array_mut().unwrap() {
+        for key in [
+            "wall_seconds",
+            "step_seconds",
+            "stage_seconds",
+            "peak_rss_mib",
+            "mib_per_million_triangles",
+        ] {
+            run[key] = Value::Null;
+        }
+        if let Some(f) = run.get_mut("failure").and_then(|f| f.as_object_mut()) {
+            f.remove("message"); // names the run directory
+        }
+    }
+    for s in r["summary"].as_array_mut().unwrap() {
+        for key in [
+            "mean_seconds",
+            "median_seconds",
+            "max_seconds",
+            "mean_stage_seconds",
+            "max_peak_rss_mib",
+            "max_mib_per_million_triangles",
+        ] {
+            s[key] = Value::Null;
+        }
+    }
+    r
+}
