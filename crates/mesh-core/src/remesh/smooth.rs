@@ -132,47 +132,46 @@ pub(crate) fn commit_moves(
     proposals: &[(VertexId, DVec3)],
 ) -> SmoothOutcome {
     let mut out = SmoothOutcome::default();
-    let mut pending: Vec<(VertexId, DVec3)> = proposals.to_vec();
     let mut alone: Vec<(VertexId, DVec3)> = Vec::new();
-    let mut claimed = vec![false; mesh.triangle_capacity()];
-    let mut batch: Vec<(VertexId, DVec3)> = Vec::new();
-    let mut rest: Vec<(VertexId, DVec3)> = Vec::new();
-    let mut touched = Vec::new();
     let mut edit = Edit::default();
-    // Each round takes at least the front move of the queue: bounded by the proposals.
-    for _ in 0..=proposals.len() {
-        if pending.is_empty() {
-            break;
+    // Batches: the moves grouped by level, each level cut into runs of MAX_BATCH, in
+    // proposal order. A move's level is one more than the highest level among the earlier
+    // moves it shares a triangle with, so no two moves of a level are neighbours, and of
+    // any two neighbouring moves the one proposed first is committed first, as one at a
+    // time would (that order decides which of them sees the other's result); moves that
+    // touch nothing in common commute. One linear pass: a triangle remembers the highest
+    // level of the moves seen at it (a rescan of the queue per batch made smoothing
+    // quadratic in the number of moves).
+    let mut at_triangle: Vec<u32> = vec![0; mesh.triangle_capacity()];
+    let mut levels: Vec<u32> = Vec::with_capacity(proposals.len());
+    for &(v, _) in proposals {
+        if !mesh.is_vertex_alive(v) {
+            levels.push(u32::MAX);
+            continue;
         }
-        // The moves no earlier pending move shares a triangle with: an independent set
-        // in which, of any two neighbouring moves, the one proposed first is committed
-        // first, as one at a time would (that order decides which of them sees the other's
-        // result). A move passed over blocks its triangles for the rest of the round, so a
-        // later neighbour of it waits too; moves that touch nothing in common commute.
+        let level = mesh
+            .vertex_triangles(v)
+            .map(|t| at_triangle[t.idx()])
+            .max()
+            .unwrap_or(0);
+        mesh.vertex_triangles(v)
+            .for_each(|t| at_triangle[t.idx()] = level + 1);
+        levels.push(level);
+    }
+    drop(at_triangle);
+    let mut order: Vec<u32> = (0..proposals.len() as u32)
+        .filter(|&i| levels[i as usize] != u32::MAX)
+        .collect();
+    out.refused += proposals.len() - order.len();
+    // Stable: proposal order within a level.
+    order.sort_by_key(|&i| levels[i as usize]);
+    let batches = order
+        .chunk_by(|&a, &b| levels[a as usize] == levels[b as usize])
+        .flat_map(|level| level.chunks(MAX_BATCH));
+    let mut batch: Vec<(VertexId, DVec3)> = Vec::with_capacity(MAX_BATCH);
+    for members in batches {
         batch.clear();
-        rest.clear();
-        touched.clear();
-        for &(v, d) in &pending {
-            if !mesh.is_vertex_alive(v) {
-                out.refused += 1;
-                continue;
-            }
-            let free =
-                batch.len() < MAX_BATCH && mesh.vertex_triangles(v).all(|t| !claimed[t.idx()]);
-            if free {
-                batch.push((v, d));
-            } else {
-                rest.push((v, d));
-            }
-            for t in mesh.vertex_triangles(v) {
-                if !std::mem::replace(&mut claimed[t.idx()], true) {
-                    touched.push(t);
-                }
-            }
-        }
-        for &t in &touched {
-            claimed[t.idx()] = false;
-        }
+        batch.extend(members.iter().map(|&i| proposals[i as usize]));
         // Local checks, in parallel: each move's triangles are its own.
         let snapshot: &LabeledMesh = mesh;
         let checked: Vec<Option<(VertexMove, f64)>> = batch
@@ -246,9 +245,7 @@ pub(crate) fn commit_moves(
                     .map(|m| (m.vertex, m.end - mesh.position(m.vertex))),
             );
         }
-        std::mem::swap(&mut pending, &mut rest);
     }
-    alone.append(&mut pending);
     let mut volumes = Vec::new();
     for &(v, d) in &alone {
         match smooth_vertex_in(&mut edit, &mut volumes, mesh, attrs, guard, v, d, params) {
