@@ -32,3 +32,4 @@ pub mod record;
 pub mod report;
 pub mod scenes;
 pub mod view;
+pub mod wall;

@@ -32,7 +32,9 @@ pub mod tracker;
 
 pub use broadphase::{Broadphase, Candidates, Elements};
 pub use guard::{CollisionGuard, CollisionGuardOptions, GuardStats};
-pub use merge::{MergeError, MergeOptions, MergeReport, snap_merge, snap_merge_with};
+pub use merge::{
+    MergeError, MergeOptions, MergeReport, snap_merge, snap_merge_from, snap_merge_with,
+};
 pub use params::{AmbientFlow, CollisionParams, ParamsError, StepValidation, VelocityGradientFn};
 pub use resolve::{ResolveError, ResolveOptions, ResolveReport, Resolved, resolve_step};
 pub use tracker::CollisionTracker;
