@@ -25,6 +25,7 @@ pub mod guard;
 pub mod merge;
 pub mod params;
 pub mod proximity;
+mod relax;
 pub mod resolve;
 mod step;
 mod t1t2;

@@ -6,6 +6,7 @@
 //!     resolve      (§4.2; El Topo §3.8)               collision-free motion, halving if needed   ✓
 //!     merge        (§7.1)                             snap proximate surfaces together           ✓
 //!     improve      (§4.3; El Topo §3.5–3.6)           split, collapse, flip, smooth, T2           ✓
+//!     relax        (§8.2)                             walls and triple curves smoothed           ✓
 //!     t1t2         (§5, §6; El Topo §3.6)             T2, T1 by separation strength, pinching    ✓
 //!     validate                                        layers 1–3 (or 1–4) of `validate`
 //! ```
@@ -38,6 +39,7 @@ use rayon::prelude::*;
 use crate::guard::{CollisionGuard, CollisionGuardOptions};
 use crate::merge::{MergeOptions, snap_merge_from};
 use crate::params::StepValidation;
+use crate::relax::{RelaxOptions, relax_walls};
 use crate::resolve::{ResolveOptions, resolve_step};
 use crate::t1t2::{T1T2Options, add_counts, separate_regions};
 
@@ -64,6 +66,8 @@ pub(crate) struct StepConfig {
     /// Regions whose mean thickness (volume / area) is below this are not counted as
     /// regions in the step's merge and split events ([`RegionCensus::thicker_than`]).
     pub region_thickness: f64,
+    /// Wall relaxation after improvement.
+    pub relax: RelaxOptions,
 }
 
 /// What a successful step hands back to the tracker.
@@ -144,6 +148,14 @@ pub(crate) fn advance_mesh(
         count_improvement(&improved, &mut report);
         report.time_stage("improve", clock.elapsed());
         budget("improve")?;
+    }
+
+    if config.relax.passes > 0 {
+        let clock = Instant::now();
+        let relaxed = relax_walls(&mut work, &mut motion, &mut guard, &config.relax);
+        report.events.remeshing_edits += relaxed.moved as u64;
+        report.time_stage("relax", clock.elapsed());
+        budget("relax")?;
     }
 
     let clock = Instant::now();

@@ -287,7 +287,7 @@ fn inverts(mesh: &LabeledMesh, edit: &Edit, a: VertexId, b: VertexId) -> bool {
 
 /// The largest change of any label's volume the collapse causes (cone volumes from the
 /// position of `a`; kept triangles of `a` move with it).
-fn label_volume_change(mesh: &LabeledMesh, edit: &Edit, a: VertexId) -> f64 {
+pub(crate) fn label_volume_change(mesh: &LabeledMesh, edit: &Edit, a: VertexId) -> f64 {
     let r = mesh.position(a);
     let mut change: Vec<(Label, f64)> = Vec::new();
     let mut add = |labels: [Label; 2], p: [DVec3; 3], sign: f64| {

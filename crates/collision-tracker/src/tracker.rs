@@ -15,6 +15,7 @@ use mesh_core::{LabeledMesh, RegionCensus, StepReport, SurfaceTracker, TrackErro
 
 use crate::merge::MergeOptions;
 use crate::params::{AmbientFlow, CollisionParams};
+use crate::relax::RelaxOptions;
 use crate::resolve::ResolveOptions;
 use crate::step::{StepConfig, advance_mesh};
 use crate::t1t2::T1T2Options;
@@ -178,6 +179,16 @@ fn configure(params: &CollisionParams, l: f64) -> StepConfig {
         // A tenth of ℓ: slivers between snapped sheets are a few merge distances (0.02 ℓ)
         // thick; a ball this thin (radius 0.3 ℓ) is below what edges of length ℓ resolve.
         region_thickness: 0.1 * l,
+        relax: RelaxOptions {
+            passes: if params.improve {
+                params.relax_passes
+            } else {
+                0
+            },
+            step: 0.5,
+            max_volume_change: params.max_volume_change.unwrap_or(0.1 * l * l * l),
+            min_move: 1e-3 * l,
+        },
     }
 }
 
