@@ -126,7 +126,9 @@ fn relaxed_position(mesh: &LabeledMesh, v: VertexId, step: f64) -> Option<DVec3>
     }
     let pair = pair?;
     if one_pair {
-        if pair.contains(&Label::OUTSIDE) || !(area > 0.0) {
+        if pair.contains(&Label::OUTSIDE)
+            || area.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
+        {
             return None;
         }
         return Some(p + step * sum / area);
