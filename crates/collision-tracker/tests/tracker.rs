@@ -491,7 +491,7 @@ fn time_budget_and_scale_are_typed_errors() {
 fn pressed_spheres_merge_once_and_share_a_flat_wall() {
     let mesh = two_spheres([1, 2], 0.04, 2);
     let mut t = tracker(mesh, CollisionParams::default());
-    let reports = run(t.as_mut(), 14, |m, _| expand_into_outside(m, 0.02));
+    let reports = run(t.as_mut(), 12, |m, _| expand_into_outside(m, 0.03));
     let merges: u64 = reports.iter().map(|r| r.events.merges).sum();
     let splits: u64 = reports.iter().map(|r| r.events.splits).sum();
     assert_eq!(
