@@ -36,3 +36,4 @@ pub mod scaling;
 pub mod scenes;
 pub mod slurm;
 pub mod view;
+pub mod wall;

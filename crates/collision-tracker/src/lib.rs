@@ -25,6 +25,7 @@ pub mod guard;
 pub mod merge;
 pub mod params;
 pub mod proximity;
+mod relax;
 pub mod resolve;
 mod step;
 mod t1t2;
@@ -32,7 +33,9 @@ pub mod tracker;
 
 pub use broadphase::{Broadphase, Candidates, Elements};
 pub use guard::{CollisionGuard, CollisionGuardOptions, GuardStats};
-pub use merge::{MergeError, MergeOptions, MergeReport, snap_merge, snap_merge_with};
+pub use merge::{
+    MergeError, MergeOptions, MergeReport, snap_merge, snap_merge_from, snap_merge_with,
+};
 pub use params::{AmbientFlow, CollisionParams, ParamsError, StepValidation, VelocityGradientFn};
 pub use resolve::{ResolveError, ResolveOptions, ResolveReport, Resolved, resolve_step};
 pub use tracker::CollisionTracker;

@@ -158,6 +158,10 @@ pub struct CollisionParams {
     /// unchanged.
     #[serde(with = "mesh_core::tracker::optional_seconds")]
     pub time_budget: Option<std::time::Duration>,
+    /// Passes of wall relaxation per step (the `relax` stage: walls between two
+    /// non-ambient labels smoothed, triple curves smoothed along themselves; each move
+    /// bounded by Ω and checked by the collision guard). Default 2; 0 turns it off.
+    pub relax_passes: usize,
 }
 
 impl Default for CollisionParams {
@@ -182,6 +186,7 @@ impl Default for CollisionParams {
             impact_zones: true,
             collision_safety: true,
             time_budget: None,
+            relax_passes: 2,
         }
     }
 }

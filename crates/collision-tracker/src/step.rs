@@ -6,6 +6,7 @@
 //!     resolve      (§4.2; El Topo §3.8)               collision-free motion, halving if needed   ✓
 //!     merge        (§7.1)                             snap proximate surfaces together           ✓
 //!     improve      (§4.3; El Topo §3.5–3.6)           split, collapse, flip, smooth, T2           ✓
+//!     relax        (§8.2)                             walls and triple curves smoothed           ✓
 //!     t1t2         (§5, §6; El Topo §3.6)             T2, T1 by separation strength, pinching    ✓
 //!     validate                                        layers 1–3 (or 1–4) of `validate`
 //! ```
@@ -17,8 +18,15 @@
 //!
 //! Topology events: T1 and T2 come from the operations' own reports; merges and splits are
 //! read off [`RegionCensus`] (surface components and bounded region shells per label, the
-//! definition the grid backend uses too), compared across the merge stage and across the
-//! rest of the step.
+//! definition the grid backend uses too), compared between the start and the end of the
+//! step, so that a merge is counted when two regions first touch and a split when one
+//! parts — not once per snapped pair. Regions thinner than
+//! [`StepConfig::region_thickness`] are not counted: snapping traps slivers of the
+//! surrounding material between the sheets it joins, and the next snaps close them.
+//!
+//! Merging and separation agree: vertices snapped in this step or the previous one (the
+//! tracker carries them over) are never separated by T1, and the merge zips outward from
+//! them (see [`crate::merge::snap_merge_from`]).
 
 use std::time::Instant;
 
@@ -29,8 +37,9 @@ use mesh_core::{LabeledMesh, RegionCensus, StepReport, TrackError, VertexId, che
 use rayon::prelude::*;
 
 use crate::guard::{CollisionGuard, CollisionGuardOptions};
-use crate::merge::{MergeOptions, snap_merge_with};
+use crate::merge::{MergeOptions, snap_merge_from};
 use crate::params::StepValidation;
+use crate::relax::{RelaxOptions, relax_walls};
 use crate::resolve::{ResolveOptions, resolve_step};
 use crate::t1t2::{T1T2Options, add_counts, separate_regions};
 
@@ -54,17 +63,35 @@ pub(crate) struct StepConfig {
     /// resolution and remeshing edits are not checked (the ablation; the mesh may then
     /// intersect itself).
     pub collision_safety: bool,
+    /// Regions whose mean thickness (volume / area) is below this are not counted as
+    /// regions in the step's merge and split events ([`RegionCensus::thicker_than`]).
+    pub region_thickness: f64,
+    /// Wall relaxation after improvement.
+    pub relax: RelaxOptions,
+}
+
+/// What a successful step hands back to the tracker.
+pub(crate) struct Advanced {
+    pub mesh: LabeledMesh,
+    /// The census of `mesh`, for the next step's event count.
+    pub census: RegionCensus,
+    pub report: StepReport,
+    /// Vertices snapped by this step's merge, for the next step (see
+    /// [`crate::merge::snap_merge_from`]).
+    pub snapped: Vec<VertexId>,
 }
 
 /// Runs Algorithm 1 on a clone of `mesh` and returns the new mesh with its report, or the
-/// first error (the caller keeps `mesh`). `before` is `RegionCensus::of(mesh)`, carried
-/// from the previous step.
+/// first error (the caller keeps `mesh`). `before` is the census of `mesh` at
+/// `config.region_thickness`, and `recent_snaps` the vertices the previous step snapped,
+/// both carried from the previous step.
 pub(crate) fn advance_mesh(
     mesh: &LabeledMesh,
     before: &RegionCensus,
+    recent_snaps: &[VertexId],
     proposed: &[DVec3],
     config: &StepConfig,
-) -> Result<(LabeledMesh, RegionCensus, StepReport), TrackError> {
+) -> Result<Advanced, TrackError> {
     check_proposal(mesh, proposed)?;
     if let Some(limit) = config.max_displacement {
         check_displacement(mesh, proposed, limit)?;
@@ -97,22 +124,16 @@ pub(crate) fn advance_mesh(
         ..CollisionGuardOptions::default()
     });
 
-    let mut count = before.clone();
+    // Snapped in the previous step and (after the merge) in this one.
+    let mut snapped: Vec<VertexId> = recent_snaps.to_vec();
     if let Some(options) = &config.merge {
         let clock = Instant::now();
-        let merged = snap_merge_with(&mut work, &mut motion, options, &mut guard).map_err(|e| {
-            TrackError::StageFailed {
+        snap_merge_from(&mut work, &mut motion, options, &mut guard, &mut snapped).map_err(
+            |e| TrackError::StageFailed {
                 stage: "merge",
                 reason: e.to_string(),
-            }
-        })?;
-        if merged.snaps + merged.edge_splits + merged.face_splits > 0 {
-            let after = RegionCensus::of(&work);
-            let (merges, splits) = after.events_since(&count);
-            report.events.merges += merges;
-            report.events.splits += splits;
-            count = after;
-        }
+            },
+        )?;
         report.time_stage("merge", clock.elapsed());
         budget("merge")?;
     }
@@ -129,18 +150,26 @@ pub(crate) fn advance_mesh(
         budget("improve")?;
     }
 
+    if config.relax.passes > 0 {
+        let clock = Instant::now();
+        let relaxed = relax_walls(&mut work, &mut motion, &mut guard, &config.relax);
+        report.events.remeshing_edits += relaxed.moved as u64;
+        report.time_stage("relax", clock.elapsed());
+        budget("relax")?;
+    }
+
     let clock = Instant::now();
-    let counts = separate_regions(&mut work, &mut motion, &mut guard, &config.t1t2);
+    let counts = separate_regions(&mut work, &mut motion, &mut guard, &config.t1t2, &snapped);
     add_counts(&mut report.events, &counts);
 
     report.time_stage("t1t2", clock.elapsed());
     budget("t1t2")?;
 
     let clock = Instant::now();
-    // Improvement, T1 and T2 after the merge stage: a T1 pulls regions apart; a region
-    // that vanished by T2 is neither (RegionCensus discounts it).
-    let after = RegionCensus::of(&work);
-    let (merges, splits) = after.events_since(&count);
+    // The whole step's change: a contact made and a region parted (a region that
+    // vanished by T2 is neither; RegionCensus discounts it).
+    let after = RegionCensus::thicker_than(&work, config.region_thickness);
+    let (merges, splits) = after.events_since(before);
     report.events.merges += merges;
     report.events.splits += splits;
     check(&work, config.validation)?;
@@ -148,7 +177,15 @@ pub(crate) fn advance_mesh(
 
     report.vertices = work.num_vertices();
     report.triangles = work.num_triangles();
-    Ok((work, after, report))
+    let carried = recent_snaps.len().min(snapped.len());
+    snapped.drain(..carried);
+    snapped.retain(|&v| work.is_vertex_alive(v));
+    Ok(Advanced {
+        mesh: work,
+        census: after,
+        report,
+        snapped,
+    })
 }
 
 /// Fails the step once `budget` has run out; `stage` is the stage just finished.

@@ -74,11 +74,14 @@ pub(crate) struct T1T2Counts {
 
 /// Runs the stage (see the module doc). `motion` is each vertex's proposed displacement
 /// over this step (a 3-vector attribute that followed the mesh through the earlier edits).
+/// `protected` are vertices snapped in this step or the previous one: T1 never separates
+/// them (Los Topos §5 and §7 agree: a separation does not undo a fresh merge).
 pub(crate) fn separate_regions(
     mesh: &mut LabeledMesh,
     motion: &mut VertexAttributes,
     guard: &mut CollisionGuard,
     options: &T1T2Options,
+    protected: &[VertexId],
 ) -> T1T2Counts {
     let candidates = if options.t1 {
         initiating_candidates(mesh, motion, options)
@@ -86,7 +89,7 @@ pub(crate) fn separate_regions(
         Vec::new()
     };
     if candidates.is_empty() {
-        return separate_only(mesh, motion, guard, options);
+        return separate_only(mesh, motion, guard, options, protected);
     }
     let snapshot = mesh.clone();
     let snapshot_motion = motion.clone();
@@ -97,7 +100,7 @@ pub(crate) fn separate_regions(
             counts.initiated += 1;
         }
     }
-    let rest = separate_only(mesh, motion, guard, options);
+    let rest = separate_only(mesh, motion, guard, options, protected);
     counts.t1 = rest.t1;
     counts.t2 = rest.t2;
     counts.pinched = rest.pinched;
@@ -108,7 +111,7 @@ pub(crate) fn separate_regions(
     *mesh = snapshot;
     *motion = snapshot_motion;
     guard.reset();
-    let mut counts = separate_only(mesh, motion, guard, options);
+    let mut counts = separate_only(mesh, motion, guard, options, protected);
     counts.fell_back = true;
     counts
 }
@@ -119,6 +122,7 @@ fn separate_only(
     motion: &mut VertexAttributes,
     guard: &mut dyn EditGuard,
     options: &T1T2Options,
+    protected: &[VertexId],
 ) -> T1T2Counts {
     let mut counts = T1T2Counts::default();
     let t2 = |mesh: &mut LabeledMesh, motion: &mut VertexAttributes, guard: &mut dyn EditGuard| {
@@ -130,7 +134,10 @@ fn separate_only(
     }
     if options.t1 {
         let gate = Displacements::of(mesh, motion);
-        let strength = Strength::new(options.ambient_flow.as_ref(), &gate);
+        let strength = Gated {
+            strength: Strength::new(options.ambient_flow.as_ref(), &gate),
+            protected: protected_flags(mesh, protected),
+        };
         let s = separate_irregular_vertices(mesh, motion, guard, &options.separation, &strength);
         counts.t1 = s.separations as u64;
         if options.pinch {
@@ -280,7 +287,7 @@ fn inverts(mesh: &LabeledMesh, edit: &Edit, a: VertexId, b: VertexId) -> bool {
 
 /// The largest change of any label's volume the collapse causes (cone volumes from the
 /// position of `a`; kept triangles of `a` move with it).
-fn label_volume_change(mesh: &LabeledMesh, edit: &Edit, a: VertexId) -> f64 {
+pub(crate) fn label_volume_change(mesh: &LabeledMesh, edit: &Edit, a: VertexId) -> f64 {
     let r = mesh.position(a);
     let mut change: Vec<(Label, f64)> = Vec::new();
     let mut add = |labels: [Label; 2], p: [DVec3; 3], sign: f64| {
@@ -400,6 +407,33 @@ impl SeparationStrength for Strength<'_> {
                     AreaDecrease.strength(mesh, v, d, proposal)
                 }
             }
+        }
+    }
+}
+
+/// Per-vertex flags of the vertices T1 must leave joined.
+fn protected_flags(mesh: &LabeledMesh, protected: &[VertexId]) -> Vec<bool> {
+    let mut flags = vec![false; mesh.vertex_capacity()];
+    for &v in protected {
+        if let Some(f) = flags.get_mut(v.idx()) {
+            *f = true;
+        }
+    }
+    flags
+}
+
+/// A strength that is zero at protected vertices (fresh snaps), the inner one elsewhere.
+struct Gated<'a> {
+    strength: Strength<'a>,
+    protected: Vec<bool>,
+}
+
+impl SeparationStrength for Gated<'_> {
+    fn strength(&self, mesh: &LabeledMesh, v: VertexId, d: DVec3, proposal: &Edit) -> f64 {
+        if self.protected.get(v.idx()).copied().unwrap_or(false) {
+            0.0
+        } else {
+            self.strength.strength(mesh, v, d, proposal)
         }
     }
 }

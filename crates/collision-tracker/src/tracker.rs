@@ -11,10 +11,11 @@ use glam::DVec3;
 use mesh_core::remesh::improve::mean_edge_length;
 use mesh_core::remesh::{ImproveParams, SeparationParams};
 use mesh_core::validate::{ValidateOptions, validate};
-use mesh_core::{LabeledMesh, RegionCensus, StepReport, SurfaceTracker, TrackError};
+use mesh_core::{LabeledMesh, RegionCensus, StepReport, SurfaceTracker, TrackError, VertexId};
 
 use crate::merge::MergeOptions;
 use crate::params::{AmbientFlow, CollisionParams};
+use crate::relax::RelaxOptions;
 use crate::resolve::ResolveOptions;
 use crate::step::{StepConfig, advance_mesh};
 use crate::t1t2::T1T2Options;
@@ -34,8 +35,12 @@ use crate::t1t2::T1T2Options;
 /// ```
 pub struct CollisionTracker {
     mesh: LabeledMesh,
-    /// Connected components and bounded shells of `mesh`, carried between steps.
+    /// Connected components and bounded shells of `mesh` (at the step's region
+    /// thickness), carried between steps.
     count: RegionCensus,
+    /// Vertices the last step snapped: the next step's merge zips outward from them and
+    /// its T1 stage does not separate them.
+    recent_snaps: Vec<VertexId>,
     params: CollisionParams,
     /// The target edge length ℓ fixed at construction.
     target_edge_length: f64,
@@ -72,10 +77,11 @@ impl CollisionTracker {
         }
         check_scale(&mesh, target)?;
         let config = configure(&params, target);
-        let count = RegionCensus::of(&mesh);
+        let count = RegionCensus::thicker_than(&mesh, config.region_thickness);
         Ok(Self {
             mesh,
             count,
+            recent_snaps: Vec::new(),
             params,
             target_edge_length: target,
             config,
@@ -170,6 +176,19 @@ fn configure(params: &CollisionParams, l: f64) -> StepConfig {
         collision_safety: params.collision_safety,
         // Far below the repulsion distance (10⁻³ ℓ), far above rounding.
         min_separation: 1e-6 * l,
+        // A tenth of ℓ: slivers between snapped sheets are a few merge distances (0.02 ℓ)
+        // thick; a ball this thin (radius 0.3 ℓ) is below what edges of length ℓ resolve.
+        region_thickness: 0.1 * l,
+        relax: RelaxOptions {
+            passes: if params.improve {
+                params.relax_passes
+            } else {
+                0
+            },
+            step: 0.5,
+            max_volume_change: params.max_volume_change.unwrap_or(0.1 * l * l * l),
+            min_move: 1e-3 * l,
+        },
     }
 }
 
@@ -183,10 +202,17 @@ impl SurfaceTracker for CollisionTracker {
     }
 
     fn advance(&mut self, proposed: &[DVec3]) -> Result<StepReport, TrackError> {
-        let (mesh, count, report) = advance_mesh(&self.mesh, &self.count, proposed, &self.config)?;
-        self.mesh = mesh;
-        self.count = count;
-        Ok(report)
+        let step = advance_mesh(
+            &self.mesh,
+            &self.count,
+            &self.recent_snaps,
+            proposed,
+            &self.config,
+        )?;
+        self.mesh = step.mesh;
+        self.count = step.census;
+        self.recent_snaps = step.snapped;
+        Ok(step.report)
     }
 }
 

@@ -482,3 +482,45 @@ fn time_budget_and_scale_are_typed_errors() {
         other => panic!("expected InvalidInput, got {:?}", other.map(|_| ())),
     }
 }
+
+/// Issue 15: two spheres pressed together make one contact — exactly one merge and no
+/// split over the whole run (snapped pairs, slivers trapped between the sheets and their
+/// closure are not events), and the wall they share stays a flat membrane (by symmetry
+/// the plane x = 0): no fins tilted away from it.
+#[test]
+fn pressed_spheres_merge_once_and_share_a_flat_wall() {
+    let mesh = two_spheres([1, 2], 0.04, 2);
+    let mut t = tracker(mesh, CollisionParams::default());
+    let reports = run(t.as_mut(), 12, |m, _| expand_into_outside(m, 0.03));
+    let merges: u64 = reports.iter().map(|r| r.events.merges).sum();
+    let splits: u64 = reports.iter().map(|r| r.events.splits).sum();
+    assert_eq!(
+        (merges, splits),
+        (1, 0),
+        "{:?}",
+        reports.iter().map(|r| &r.events).collect::<Vec<_>>()
+    );
+    let m = t.mesh();
+    let (mut area, mut tilted, mut far) = (0.0, 0.0, 0.0f64);
+    for tri in m.triangles() {
+        let mut l = m.labels(tri);
+        l.sort();
+        if l != [Label::new(1), Label::new(2)] {
+            continue;
+        }
+        let p = m.tri_positions(tri);
+        let n = (p[1] - p[0]).cross(p[2] - p[0]);
+        area += 0.5 * n.length();
+        if n.x.abs() < 30f64.to_radians().cos() * n.length() {
+            tilted += 0.5 * n.length();
+        }
+        far = p.iter().fold(far, |f, q| f.max(q.x.abs()));
+    }
+    assert!(area > 0.0, "no wall");
+    assert!(
+        tilted < 0.25 * area,
+        "{:.0} % of the wall is tilted > 30°",
+        100.0 * tilted / area
+    );
+    assert!(far < 0.1, "a wall vertex lies {far} off the plane");
+}

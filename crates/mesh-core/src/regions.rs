@@ -26,6 +26,9 @@ pub struct RegionShell {
     /// to face into the region, so a bounded region has positive volume and the unbounded
     /// outside region a negative one).
     pub volume: f64,
+    /// Total area of the shell's sides; `volume / area` is a third of a ball's radius and
+    /// half the thickness of a sliver trapped between two sheets.
+    pub area: f64,
 }
 
 /// All region shells of a mesh and the shell of every side.
@@ -71,6 +74,7 @@ impl LabeledMesh {
                     consistent: true,
                     closed: true,
                     volume: 0.0,
+                    area: 0.0,
                 };
                 side_shell[start] = id;
                 stack.push(start as u32);
@@ -83,6 +87,7 @@ impl LabeledMesh {
                     let [a, b, c] =
                         [c0, c0.next(), c0.prev()].map(|c| self.position(self.corner_vertex(c)));
                     shell.volume -= a.dot(b.cross(c)) / 6.0;
+                    shell.area += 0.5 * (b - a).cross(c - a).length();
                     for c in [c0, c0.next(), c0.prev()] {
                         match self.opposite(c) {
                             Some(o) => {
@@ -118,9 +123,23 @@ pub struct RegionCensus {
 impl RegionCensus {
     /// The census of `mesh` (one flood fill, linear time).
     pub fn of(mesh: &LabeledMesh) -> Self {
+        Self::thicker_than(mesh, 0.0)
+    }
+
+    /// The census of `mesh` counting only regions whose mean thickness is at least
+    /// `min_thickness`: bounded shells with `volume ≥ min_thickness · area`, and surface
+    /// components with at least one such shell. An explicit tracker that merges by
+    /// snapping traps slivers of the surrounding material between two sheets it is
+    /// joining (a few hundredths of an edge thick, closed up by the next snaps); they are
+    /// no more regions than the grid backend, which cannot represent anything thinner
+    /// than its cells, would see, and counting them reports a split per sliver and a
+    /// merge per closure. `min_thickness = 0` counts every bounded shell and component
+    /// ([`RegionCensus::of`]).
+    pub fn thicker_than(mesh: &LabeledMesh, min_thickness: f64) -> Self {
         let regions = mesh.regions();
+        let significant = |s: &RegionShell| s.volume > 0.0 && s.volume >= min_thickness * s.area;
         let mut shells = std::collections::BTreeMap::new();
-        for s in regions.bounded() {
+        for s in regions.shells.iter().filter(|s| significant(s)) {
             *shells.entry(s.label).or_insert(0) += 1;
         }
         // Both sides of a triangle lie on one surface component: union their shells.
@@ -144,9 +163,19 @@ impl RegionCensus {
                 }
             }
         }
-        let components = (0..parent.len() as u32)
-            .filter(|&i| find(&mut parent, i) == i)
-            .count();
+        let components = if min_thickness > 0.0 {
+            let mut counted = vec![false; parent.len()];
+            for (i, shell) in regions.shells.iter().enumerate() {
+                if significant(shell) {
+                    counted[find(&mut parent, i as u32) as usize] = true;
+                }
+            }
+            counted.iter().filter(|&&c| c).count()
+        } else {
+            (0..parent.len() as u32)
+                .filter(|&i| find(&mut parent, i) == i)
+                .count()
+        };
         Self { components, shells }
     }
 
@@ -223,6 +252,18 @@ mod census_tests {
         assert_eq!(joined.components, 1);
         assert_eq!(joined.events_since(&apart), (1, 0));
         assert_eq!(apart.events_since(&joined), (0, 1));
+    }
+
+    #[test]
+    fn thin_census_ignores_slivers_but_not_bubbles() {
+        // A bubble of radius 0.5 has volume / area = 1/6: counted at thickness 0.1, not
+        // at 0.2.
+        let m = spheres([1, 2], true);
+        assert_eq!(RegionCensus::thicker_than(&m, 0.1), RegionCensus::of(&m));
+        let thin = RegionCensus::thicker_than(&m, 0.2);
+        assert_eq!(thin.components, 1);
+        assert_eq!(thin.shells.get(&Label::new(2)), None);
+        assert_eq!(thin.shells.get(&Label::new(1)), Some(&1));
     }
 
     #[test]

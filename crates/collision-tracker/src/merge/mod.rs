@@ -185,6 +185,28 @@ pub fn snap_merge_with(
     options: &MergeOptions,
     guard: &mut dyn EditGuard,
 ) -> Result<MergeReport, MergeError> {
+    snap_merge_from(mesh, attrs, options, guard, &mut Vec::new())
+}
+
+/// Snap merging that proceeds outward from the contacts already made (Los Topos §7.1:
+/// a contact zone joins into one wall within a few steps, instead of one pair at a time).
+///
+/// `snapped` holds, on entry, the vertices snapped in the previous step (the caller
+/// carries them over), and on return those plus every vertex snapped now. A pair one of
+/// whose vertices is, or neighbours, a *contact vertex* — one of those, or an end of a
+/// non-manifold edge (an existing wall or triple curve) — is merged without the
+/// [`MergeOptions::min_approach`] test: the flow brought the surfaces into contact
+/// there, and collision response has stopped their approach (the proposal near a fresh
+/// wall is the average of two sheets' normals and often points along it), so waiting
+/// for the flow to bring each pair together again leaves slivers between the sheets
+/// that the next steps' remeshing crumples.
+pub fn snap_merge_from(
+    mesh: &mut LabeledMesh,
+    attrs: &mut VertexAttributes,
+    options: &MergeOptions,
+    guard: &mut dyn EditGuard,
+    snapped: &mut Vec<VertexId>,
+) -> Result<MergeReport, MergeError> {
     let d = options.merge_distance;
     if !(d.is_finite() && d >= 0.0) {
         return Err(MergeError::InvalidOption {
@@ -217,6 +239,7 @@ pub fn snap_merge_with(
     let shells_before = bounded_shells(mesh);
     let interfaces_before = interfaces(mesh);
     let mut reach = SurfaceReach::default();
+    let mut contact = contact_vertices(mesh, snapped);
     for _ in 0..options.max_rounds {
         report.rounds += 1;
         let candidates = proximate_pairs(mesh, d);
@@ -226,7 +249,12 @@ pub fn snap_merge_with(
         report.pairs += candidates.len();
         let snaps_before = report.snaps;
         for c in &candidates {
-            merge_pair(mesh, attrs, guard, c, options, &mut reach, &mut report)?;
+            let state = PairState {
+                reach: &mut reach,
+                contact: &mut contact,
+                snapped: &mut *snapped,
+            };
+            merge_pair(mesh, attrs, guard, c, options, state, &mut report)?;
         }
         let r = remove_degenerate(mesh, attrs, guard);
         add_degenerate(&mut report.degenerate, &r);
@@ -246,6 +274,46 @@ pub fn snap_merge_with(
     Ok(report)
 }
 
+/// Per-vertex flags of [`snap_merge_from`]'s contact vertices: the given snapped vertices
+/// and the ends of every non-manifold edge.
+fn contact_vertices(mesh: &LabeledMesh, snapped: &[VertexId]) -> Vec<bool> {
+    let mut flags = vec![false; mesh.vertex_capacity()];
+    for t in mesh.triangles() {
+        let tri = mesh.tri(t);
+        for k in 0..3 {
+            let (a, b) = (tri[k], tri[(k + 1) % 3]);
+            if a < b && mesh.edge_triangles(a, b).nth(2).is_some() {
+                flags[a.idx()] = true;
+                flags[b.idx()] = true;
+            }
+        }
+    }
+    for &v in snapped {
+        if mesh.is_vertex_alive(v) && v.idx() < flags.len() {
+            flags[v.idx()] = true;
+        }
+    }
+    flags
+}
+
+/// True when `v` or one of its neighbours is a contact vertex.
+fn near_contact(mesh: &LabeledMesh, contact: &[bool], v: VertexId) -> bool {
+    let flagged = |w: VertexId| contact.get(w.idx()).copied().unwrap_or(false);
+    flagged(v)
+        || mesh
+            .vertex_triangles(v)
+            .any(|t| mesh.tri(t).into_iter().any(flagged))
+}
+
+/// The merge's working state across pairs.
+struct PairState<'a> {
+    reach: &'a mut SurfaceReach,
+    /// Contact flags by vertex index (see [`snap_merge_from`]).
+    contact: &'a mut Vec<bool>,
+    /// Vertices snapped (see [`snap_merge_from`]).
+    snapped: &'a mut Vec<VertexId>,
+}
+
 /// Splits and snaps one proximate pair, if it is still proximate in the current mesh.
 fn merge_pair(
     mesh: &mut LabeledMesh,
@@ -253,18 +321,26 @@ fn merge_pair(
     guard: &mut dyn EditGuard,
     c: &Candidate,
     options: &MergeOptions,
-    reach: &mut SurfaceReach,
+    state: PairState<'_>,
     report: &mut MergeReport,
 ) -> Result<(), MergeError> {
     let d = options.merge_distance;
-    // Whether the pair is one to leave alone: not brought together by the flow, or
-    // neighbours along one sheet.
+    let PairState {
+        reach,
+        contact,
+        snapped,
+    } = state;
+    // Whether the pair is one to leave alone: not brought together by the flow (unless
+    // it borders a contact), or neighbours along one sheet.
     let mut skip = |mesh: &LabeledMesh,
                     attrs: &VertexAttributes,
                     prox: &Proximity,
                     quad: [VertexId; 4],
                     report: &mut MergeReport| {
-        if let Some(a) = options.min_approach {
+        let at_contact = || quad.iter().any(|&v| near_contact(mesh, contact, v));
+        if let Some(a) = options.min_approach
+            && !at_contact()
+        {
             if attrs.dim() < 3 {
                 return false;
             }
@@ -326,8 +402,13 @@ fn merge_pair(
     let snapped = match sides {
         Some((keep, other)) => {
             match snap_vertices(mesh, attrs, guard, keep, other, &options.snap) {
-                Ok(_) => {
+                Ok(v) => {
                     report.snaps += 1;
+                    if contact.len() <= v.idx() {
+                        contact.resize(v.idx() + 1, false);
+                    }
+                    contact[v.idx()] = true;
+                    snapped.push(v);
                     true
                 }
                 Err(e) => {

@@ -1,0 +1,175 @@
+//! Stage "relax": clean interface walls (issue 15 item 3; Los Topos §8.2, where the wall
+//! two merged bodies share "remains smooth").
+//!
+//! ```text
+//! relax(mesh):
+//!     repeat passes times, vertices in increasing order:
+//!         wall vertex    (all triangles one label pair, neither the ambient label)
+//!                        → step · area-weighted Laplacian (normal part included)
+//!         curve vertex   (exactly two non-manifold edges, three labels around it)
+//!                        → step · (midpoint of its two curve neighbours − itself)
+//!         refused when a triangle would turn by more than 60° or a label's volume
+//!         change exceed Ω; each move one guarded edit
+//! ```
+//!
+//! **Why.** Improvement's null-space smoothing keeps sharp features, so the creases of a
+//! wall crumpled while being zipped together (each snap lands at the average of two
+//! sheets a few hundredths of ℓ apart, and the next step's collision response pushes
+//! the unsnapped rest around) read as features and stay; fins and spikes then grow with
+//! every step. A wall between two bodies has no features of its own: its shape is set
+//! by its boundary, the triple curve, so relaxing it (and the curve along itself, which
+//! keeps the curve's vertices from zig-zagging) gives the membrane the geometry implies.
+//! The ambient label's surfaces (label 0: free surfaces, the Enright and Zalesak
+//! shapes) are never touched, and every move is bounded by Ω, so volumes and sharp
+//! free-surface features keep what improvement gives them.
+
+use glam::DVec3;
+use mesh_core::geometry::unit_normal;
+use mesh_core::remesh::{Edit, EditGuard, VertexAttributes, VertexMove, apply_edit};
+use mesh_core::{Label, LabeledMesh, VertexId};
+
+use crate::t1t2::label_volume_change;
+
+/// Options of [`relax_walls`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct RelaxOptions {
+    /// Passes per step. 0 turns the stage off.
+    pub passes: usize,
+    /// Fraction of the Laplacian applied per pass (0.5: monotone on regular patches).
+    pub step: f64,
+    /// Ω: the largest change of any label's volume one move may cause.
+    pub max_volume_change: f64,
+    /// Moves shorter than this are skipped as converged.
+    pub min_move: f64,
+}
+
+/// What the stage did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) struct RelaxReport {
+    pub moved: usize,
+    pub refused: usize,
+}
+
+/// Runs the stage (see the module doc).
+pub(crate) fn relax_walls(
+    mesh: &mut LabeledMesh,
+    attrs: &mut VertexAttributes,
+    guard: &mut dyn EditGuard,
+    options: &RelaxOptions,
+) -> RelaxReport {
+    let mut report = RelaxReport::default();
+    let mut edit = Edit::default();
+    for _ in 0..options.passes {
+        let vertices: Vec<VertexId> = mesh.vertices().collect();
+        let moved_before = report.moved;
+        for v in vertices {
+            let Some(target) = relaxed_position(mesh, v, options.step) else {
+                continue;
+            };
+            let p = mesh.position(v);
+            if p.distance(target) < options.min_move {
+                continue;
+            }
+            edit.clear();
+            edit.moves.push(VertexMove {
+                vertex: v,
+                end: target,
+                blend: None,
+            });
+            if turns(mesh, v, target)
+                || label_volume_change(mesh, &edit, v) > options.max_volume_change
+            {
+                report.refused += 1;
+                continue;
+            }
+            match apply_edit(mesh, attrs, guard, &edit) {
+                Ok(_) => report.moved += 1,
+                Err(_) => report.refused += 1,
+            }
+        }
+        if report.moved == moved_before {
+            break;
+        }
+    }
+    report
+}
+
+/// Where relaxation moves `v`, or `None` when `v` is neither a wall nor a curve vertex.
+fn relaxed_position(mesh: &LabeledMesh, v: VertexId, step: f64) -> Option<DVec3> {
+    let p = mesh.position(v);
+    let mut pair: Option<[Label; 2]> = None;
+    let mut one_pair = true;
+    let mut labels: [Option<Label>; 4] = [None; 4];
+    let mut n_labels = 0usize;
+    let (mut sum, mut area) = (DVec3::ZERO, 0.0);
+    for t in mesh.vertex_triangles(v) {
+        let [a, b] = mesh.labels(t);
+        let key = if a < b { [a, b] } else { [b, a] };
+        match pair {
+            None => pair = Some(key),
+            Some(k) if k != key => one_pair = false,
+            _ => {}
+        }
+        for l in [a, b] {
+            if !labels[..n_labels].contains(&Some(l)) {
+                if n_labels == labels.len() {
+                    return None;
+                }
+                labels[n_labels] = Some(l);
+                n_labels += 1;
+            }
+        }
+        let q = mesh.tri_positions(t);
+        let w = 0.5 * (q[1] - q[0]).cross(q[2] - q[0]).length();
+        sum += w * ((q[0] + q[1] + q[2]) / 3.0 - p);
+        area += w;
+    }
+    let pair = pair?;
+    if one_pair {
+        if pair.contains(&Label::OUTSIDE)
+            || area.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
+        {
+            return None;
+        }
+        return Some(p + step * sum / area);
+    }
+    if n_labels != 3 {
+        return None;
+    }
+    // A triple-curve vertex: its non-manifold edges are the curve.
+    let mut ends: [Option<VertexId>; 2] = [None; 2];
+    let mut count = 0usize;
+    for t in mesh.vertex_triangles(v) {
+        for w in mesh.tri(t) {
+            if w == v || ends[..count.min(2)].contains(&Some(w)) {
+                continue;
+            }
+            if mesh.edge_triangles(v, w).nth(2).is_some() {
+                if count == 2 {
+                    return None;
+                }
+                ends[count] = Some(w);
+                count += 1;
+            }
+        }
+    }
+    match ends {
+        [Some(a), Some(b)] if count == 2 => {
+            let mid = 0.5 * (mesh.position(a) + mesh.position(b));
+            Some(p + step * (mid - p))
+        }
+        _ => None,
+    }
+}
+
+/// True when a triangle at `v` would turn by more than 60° (or degenerate) if `v` moved
+/// to `target`.
+fn turns(mesh: &LabeledMesh, v: VertexId, target: DVec3) -> bool {
+    mesh.vertex_triangles(v).any(|t| {
+        let old = mesh.tri_positions(t);
+        let tri = mesh.tri(t);
+        let new = [0, 1, 2].map(|k| if tri[k] == v { target } else { old[k] });
+        let n = unit_normal(&new);
+        n == DVec3::ZERO || unit_normal(&old).dot(n) < 0.5
+    })
+}
