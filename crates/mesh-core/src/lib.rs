@@ -27,6 +27,7 @@ pub mod mesh;
 pub mod predicates;
 pub mod regions;
 pub mod remesh;
+pub mod solve;
 pub mod tracker;
 pub mod validate;
 

@@ -287,7 +287,8 @@ fn remove_common_part(r: &mut [f64], active: &[bool]) {
     }
 }
 
-/// Preconditioned conjugate gradients on the active unknowns; at most [`CG_ITERATIONS`].
+/// Preconditioned conjugate gradients (mesh-core's) on the active unknowns, with the
+/// common part of the pressures projected out; at most [`CG_ITERATIONS`].
 fn solve_pressures(sys: &PressureSystem<'_>, rhs: &[f64], disp: &mut [DVec3]) -> Vec<f64> {
     let n = rhs.len();
     let mut diag = vec![0.0; n];
@@ -297,49 +298,22 @@ fn solve_pressures(sys: &PressureSystem<'_>, rhs: &[f64], disp: &mut [DVec3]) ->
         .zip(sys.active)
         .map(|(&d, &on)| if on && d > 0.0 { 1.0 / d } else { 0.0 })
         .collect();
-    let mut x = vec![0.0; n];
-    let mut r: Vec<f64> = rhs
+    let b: Vec<f64> = rhs
         .iter()
         .zip(sys.active)
         .map(|(&b, &on)| if on { b } else { 0.0 })
         .collect();
-    remove_common_part(&mut r, sys.active);
-    let norm_b = r.iter().map(|v| v * v).sum::<f64>().sqrt();
-    if norm_b == 0.0 {
-        return x;
-    }
-    let mut z: Vec<f64> = r.iter().zip(&inv).map(|(a, b)| a * b).collect();
-    let mut p = z.clone();
-    let mut rz: f64 = r.iter().zip(&z).map(|(a, b)| a * b).sum();
-    let mut ap = vec![0.0; n];
-    for _ in 0..CG_ITERATIONS {
-        sys.displacements(&p, disp);
-        sys.volume_change(disp, &mut ap);
-        let pap: f64 = p.iter().zip(&ap).map(|(a, b)| a * b).sum();
-        // Zero or NaN curvature: the search direction is in the null space; stop.
-        if pap.is_nan() || pap <= 0.0 {
-            break;
-        }
-        let alpha = rz / pap;
-        for i in 0..n {
-            x[i] += alpha * p[i];
-            r[i] -= alpha * ap[i];
-        }
-        remove_common_part(&mut r, sys.active);
-        if r.iter().map(|v| v * v).sum::<f64>().sqrt() <= CG_TOLERANCE * norm_b {
-            break;
-        }
-        for i in 0..n {
-            z[i] = r[i] * inv[i];
-        }
-        let rz_new: f64 = r.iter().zip(&z).map(|(a, b)| a * b).sum();
-        let beta = rz_new / rz;
-        rz = rz_new;
-        for i in 0..n {
-            p[i] = z[i] + beta * p[i];
-        }
-    }
-    x
+    mesh_core::solve::conjugate_gradients(
+        &b,
+        &inv,
+        CG_TOLERANCE,
+        CG_ITERATIONS,
+        |p, ap| {
+            sys.displacements(p, disp);
+            sys.volume_change(disp, ap);
+        },
+        |r| remove_common_part(r, sys.active),
+    )
 }
 
 impl Flow for VolumePreservingTension {

@@ -240,53 +240,23 @@ fn project_zone(group: &[(u32, Contact)], u: &[DVec3], inverse_mass: &[f64]) -> 
     out
 }
 
-/// Solves the symmetric positive semi-definite system `A x = b` (`b` in the range of `A`)
-/// by Jacobi-preconditioned conjugate gradients from `x = 0`, to a relative residual of
-/// `1e-13` or `2n + 20` iterations (exact arithmetic needs at most `n`).
+/// Solves `A λ = b` (`b` in the range of `A`) by mesh-core's Jacobi-preconditioned
+/// conjugate gradients, to a relative residual of `1e-13` or `2n + 20` iterations (exact
+/// arithmetic needs at most `n`).
 fn conjugate_gradients(a: &sprs::CsMat<f64>, b: &[f64]) -> Vec<f64> {
     let n = b.len();
-    let multiply = |x: &[f64], y: &mut [f64]| {
-        for (i, row) in a.outer_iterator().enumerate() {
-            y[i] = row.iter().map(|(j, &v)| v * x[j]).sum();
-        }
-    };
-    let dot = |x: &[f64], y: &[f64]| -> f64 { x.iter().zip(y).map(|(p, q)| p * q).sum() };
-    let diagonal: Vec<f64> = (0..n)
+    let inverse_diagonal: Vec<f64> = (0..n)
         .map(|i| match a.get(i, i) {
             Some(&d) if d > 0.0 => 1.0 / d,
             _ => 1.0,
         })
         .collect();
-    let mut x = vec![0.0; n];
-    let mut r = b.to_vec();
-    let mut z: Vec<f64> = r.iter().zip(&diagonal).map(|(r, d)| r * d).collect();
-    let mut p = z.clone();
-    let mut ap = vec![0.0; n];
-    let mut rz = dot(&r, &z);
-    let stop = 1e-13 * dot(b, b).sqrt();
-    for _ in 0..2 * n + 20 {
-        if dot(&r, &r).sqrt() <= stop {
-            break;
+    let multiply = |x: &[f64], y: &mut [f64]| {
+        for (i, row) in a.outer_iterator().enumerate() {
+            y[i] = row.iter().map(|(j, &v)| v * x[j]).sum();
         }
-        multiply(&p, &mut ap);
-        let pap = dot(&p, &ap);
-        if pap.is_nan() || pap <= 0.0 {
-            break;
-        }
-        let alpha = rz / pap;
-        for i in 0..n {
-            x[i] += alpha * p[i];
-            r[i] -= alpha * ap[i];
-            z[i] = r[i] * diagonal[i];
-        }
-        let rz_next = dot(&r, &z);
-        let beta = rz_next / rz;
-        rz = rz_next;
-        for i in 0..n {
-            p[i] = z[i] + beta * p[i];
-        }
-    }
-    x
+    };
+    mesh_core::solve::conjugate_gradients(b, &inverse_diagonal, 1e-13, 2 * n + 20, multiply, |_| {})
 }
 
 #[cfg(test)]
