@@ -6,6 +6,17 @@ use implicit_surface::{FollowParams, Follower, ImplicitField, scenes};
 use mesh_core::validate::{ValidateOptions, validate};
 
 /// Runs an animation, checking every frame; returns the component count per frame.
+/// A follower of `anim` from its start, at the animation's edge length.
+fn follower(anim: &scenes::Animation) -> Follower<implicit_surface::SkeletonField> {
+    Follower::new(
+        anim.field.clone(),
+        anim.t0,
+        None,
+        FollowParams::new(anim.edge_length),
+    )
+    .unwrap()
+}
+
 fn run(anim: &scenes::Animation, tol: f64) -> Vec<usize> {
     let params = FollowParams::new(anim.edge_length);
     let mut f = Follower::new(anim.field.clone(), anim.t0, None, params).unwrap();
@@ -82,13 +93,7 @@ fn three_blobs_meeting_in_one_place_merge_into_one_and_separate_into_three() {
 fn the_geometric_mesh_of_a_followed_frame_is_crack_free() {
     use implicit_surface::{RefineParams, refine};
     let anim = scenes::crossing(1.1, 0.15, 20).unwrap();
-    let mut f = Follower::new(
-        anim.field.clone(),
-        anim.t0,
-        None,
-        FollowParams::new(anim.edge_length),
-    )
-    .unwrap();
+    let mut f = follower(&anim);
     // Into the blended state, where the neck has the most curvature.
     for k in 1..=8 {
         f.advance_to(anim.time(k, 20)).unwrap();
@@ -178,13 +183,7 @@ fn a_fast_deep_crossing_keeps_its_volume_in_every_frame() {
     use mesh_core::Label;
     use mesh_core::geometry::label_volumes;
     let anim = scenes::crossing(1.1, 0.15, 10).unwrap();
-    let mut f = Follower::new(
-        anim.field.clone(),
-        anim.t0,
-        None,
-        FollowParams::new(anim.edge_length),
-    )
-    .unwrap();
+    let mut f = follower(&anim);
     let mut merged = false;
     for k in 1..=anim.frames {
         let t = anim.time(k, anim.frames);
