@@ -1,7 +1,7 @@
-//! Jacobi-preconditioned conjugate gradients, shared by the solvers that need a symmetric
-//! positive semi-definite system solved: the collision backend's inelastic impact-zone
-//! projection (sparse matrix) and the harness's volume-preserving surface tension
-//! (matrix-free pressure system).
+//! Jacobi-preconditioned conjugate gradients for the symmetric positive semi-definite
+//! systems of the flows (the harness's volume-preserving surface tension, matrix-free).
+//! (The collision backend's impact zones solve a least-squares problem instead, with
+//! CGLS: their constraint systems are too nearly singular for CG on normal equations.)
 
 /// Solves `A x = b` for a symmetric positive semi-definite `A` given by `multiply(x, y)`
 /// (`y ← A x`), from `x = 0`.

@@ -125,7 +125,7 @@ impl Contact {
 }
 
 /// Which kernel a contact came from.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub(super) enum PairKind {
     /// Vertex `[0]` against triangle `[1, 2, 3]`.
     VertexTriangle,
