@@ -59,9 +59,16 @@ fn a_hundred_bubbles_keep_their_volumes_within_one_percent_over_ten_steps() {
     assert!(steps.iter().all(|s| s["valid"] == true));
     // The foam rearranges: bubbles gain or lose neighbours (T1; measured 6 in 10 steps),
     // and the films keep being remeshed as they move.
-    let t1: u64 = steps.iter().map(|s| s["events"]["t1"].as_u64().unwrap()).sum();
+    let t1: u64 = steps
+        .iter()
+        .map(|s| s["events"]["t1"].as_u64().unwrap())
+        .sum();
     assert!(t1 > 0, "no bubble changed neighbours in 10 steps");
-    assert!(steps.iter().all(|s| s["events"]["remeshing_edits"].as_u64().unwrap() > 0));
+    assert!(
+        steps
+            .iter()
+            .all(|s| s["events"]["remeshing_edits"].as_u64().unwrap() > 0)
+    );
     // Every record carries the run's peak memory, also per million triangles (Linux).
     if cfg!(target_os = "linux") {
         let mib = record["peak_rss_mib"].as_f64().unwrap();

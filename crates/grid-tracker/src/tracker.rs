@@ -310,7 +310,6 @@ impl SurfaceTracker for GridTracker {
             t2: vanished.len() as u64,
             remeshing_edits: edits,
             vanished,
-            ..TopologyEvents::default()
         };
         let volumes = self.materials.volumes_to(&materials);
         self.mesh = mesh;
