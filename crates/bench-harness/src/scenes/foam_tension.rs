@@ -31,7 +31,10 @@
 //! steps span several relaxation times of every face — enough for the foam to rearrange
 //! (T1 events start in the first steps). Measured at 100 bubbles, resolution 6, grid
 //! backend, 20 steps: `h²` gives 13 contact changes with the last step's volume error at
-//! most 0.5 %; `3.9 h²` gives 47 with 1.5 % (every bubble below 1 % needs `h²`).
+//! most 0.5 %; `3.9 h²` gives 47 with 1.5 % (every bubble below 1 % needs `h²`). At 1000
+//! bubbles (grid, `h²`, 20 steps): 339 T1, every frame valid, median volume error 0.03 %,
+//! but the smallest bubble (a ninth of the mean volume, about two edges across) loses 6 %
+//! in a step: the tracker's resolution, not the flow, whose proposal is volume-exact.
 //!
 //! The 2024 paper's Fig. 21–22 foam is not this flow: it couples the tracker to Ishida et
 //! al.'s (2017) hyperbolic soap-film dynamics (second order in time, with inertia and
