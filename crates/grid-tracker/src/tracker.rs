@@ -49,7 +49,13 @@ use crate::scale::{CellSizeChoice, tracker_cell_size};
 /// with topology: propose positions for [`SurfaceTracker::mesh`] as it is after the last
 /// step. [`StepReport::events`] counts merges and splits with
 /// [`RegionCensus::events_since`], as the collision backend does: regions of one label
-/// joining, or separate surface components coming into contact, are merges.
+/// joining, or separate surface components coming into contact, are merges. This backend
+/// has no T1 or T2 operation — neighbour swaps and vanishing cells happen implicitly when
+/// a tangled region is rebuilt from the grid labels — so it counts them on the result:
+/// `t1` is the number of material pairs that gained or lost a shared interface
+/// ([`MaterialCensus::contact_changes`], each an elementary 3D T1 event) and `t2` the
+/// number of materials that vanished ([`TopologyEvents::vanished`]: a region shrunk to
+/// nothing, Los Topos' T2).
 #[derive(Clone, Debug)]
 pub struct GridTracker {
     mesh: LabeledMesh,
@@ -296,12 +302,14 @@ impl SurfaceTracker for GridTracker {
         if !vanished.is_empty() {
             tracing::warn!("step {}: materials {vanished:?} vanished", self.step + 1);
         }
+        let contacts = self.materials.contact_changes(&materials);
         let events = TopologyEvents {
             merges,
             splits,
+            t1: contacts.gained + contacts.lost,
+            t2: vanished.len() as u64,
             remeshing_edits: edits,
             vanished,
-            ..TopologyEvents::default()
         };
         let volumes = self.materials.volumes_to(&materials);
         self.mesh = mesh;

@@ -38,6 +38,6 @@ pub use ids::{CornerId, Id, IdVec, Label, TriId, VertexId};
 pub use mesh::{Compaction, LabeledMesh};
 pub use regions::{RegionCensus, RegionShell, Regions};
 pub use tracker::{
-    LabelVolume, MaterialCensus, StageTiming, StepReport, SurfaceTracker, TopologyEvents,
-    TrackError, check_proposal,
+    ContactChanges, LabelVolume, MaterialCensus, StageTiming, StepReport, SurfaceTracker,
+    TopologyEvents, TrackError, check_proposal,
 };

@@ -8,6 +8,7 @@
 use std::time::Duration;
 
 use glam::DVec3;
+use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::geometry::label_volumes;
@@ -102,22 +103,91 @@ pub struct LabelVolume {
     pub after: f64,
 }
 
-/// Per-material volume and presence of a mesh: what [`LabelVolume`]s and
-/// [`TopologyEvents::vanished`] are computed from, one linear pass per mesh.
+/// Per-material volume, presence and contacts of a mesh: what [`LabelVolume`]s,
+/// [`TopologyEvents::vanished`] and neighbour changes ([`MaterialCensus::contact_changes`])
+/// are computed from, linear passes per mesh.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct MaterialCensus {
     /// Enclosed volume per label that some live triangle side faces (label 0, the outside,
     /// included: minus the sum of the others on a closed mesh).
     pub volumes: std::collections::BTreeMap<Label, f64>,
+    /// Every pair of materials that share an interface (some live triangle carries the two
+    /// labels), as `[lower, higher]`, sorted, each once.
+    pub contacts: Vec<[Label; 2]>,
+}
+
+/// Pairs of materials that started or stopped sharing an interface between two meshes
+/// ([`MaterialCensus::contact_changes`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ContactChanges {
+    /// Pairs in contact after, not before.
+    pub gained: u64,
+    /// Pairs in contact before, not after.
+    pub lost: u64,
 }
 
 impl MaterialCensus {
     /// The census of `mesh`: [`label_volumes`], whose keys are exactly the labels some
-    /// live triangle side carries.
+    /// live triangle side carries, and the contacts of its live triangles.
     pub fn of(mesh: &LabeledMesh) -> Self {
+        let alive = mesh.tri_alive_flags();
+        let mut contacts: Vec<[Label; 2]> = mesh
+            .label_pairs()
+            .iter()
+            .zip(alive)
+            .filter(|(_, a)| **a)
+            .map(|(&[f, b], _)| [f.min(b), f.max(b)])
+            .collect();
+        contacts.par_sort_unstable();
+        contacts.dedup();
         Self {
             volumes: label_volumes(mesh),
+            contacts,
         }
+    }
+
+    /// Contacts gained and lost from `self` (before) to `after`, among materials present
+    /// in both: a pair with a material that vanished or appeared is that material's
+    /// event, not a change of neighbours.
+    ///
+    /// Why this counts T1 processes: in a 3D foam a T1 is a neighbour swap (Weaire and
+    /// Hutzler 2001; Los Topos §4.4: "two materials that originally share a border
+    /// separate from one another while two different neighbouring materials become
+    /// connected"). In 3D the two halves are separate elementary events — a face shrinks
+    /// to an edge and its two cells lose contact, or an edge shrinks to a point and the
+    /// cells at its ends gain a new face — and each changes exactly one pair, so
+    /// `gained + lost` is the number of elementary T1 events between the two meshes, up to
+    /// events undone within the interval.
+    pub fn contact_changes(&self, after: &MaterialCensus) -> ContactChanges {
+        let present = |l: &Label| self.volumes.contains_key(l) && after.volumes.contains_key(l);
+        let counted = |c: &&[Label; 2]| present(&c[0]) && present(&c[1]);
+        let (mut gained, mut lost) = (0, 0);
+        let (mut a, mut b) = (
+            self.contacts.iter().filter(counted).peekable(),
+            after.contacts.iter().filter(counted).peekable(),
+        );
+        loop {
+            match (a.peek(), b.peek()) {
+                (Some(x), Some(y)) if x == y => {
+                    a.next();
+                    b.next();
+                }
+                (Some(x), Some(y)) if x < y => {
+                    lost += 1;
+                    a.next();
+                }
+                (Some(_), Some(_)) | (None, Some(_)) => {
+                    gained += 1;
+                    b.next();
+                }
+                (Some(_), None) => {
+                    lost += 1;
+                    a.next();
+                }
+                (None, None) => break,
+            }
+        }
+        ContactChanges { gained, lost }
     }
 
     /// Bounded materials (label ≠ 0) of `self` (before) and `after`, with both volumes.
@@ -249,5 +319,51 @@ pub mod optional_seconds {
                 .map(Some)
                 .map_err(|e| serde::de::Error::custom(format!("time_budget = {x}: {e}"))),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn census(labels: &[u32], contacts: &[[u32; 2]]) -> MaterialCensus {
+        MaterialCensus {
+            volumes: labels.iter().map(|&l| (Label::new(l), 1.0)).collect(),
+            contacts: contacts
+                .iter()
+                .map(|&[a, b]| [Label::new(a), Label::new(b)])
+                .collect(),
+        }
+    }
+
+    #[test]
+    fn contacts_of_a_double_bubble() {
+        let mesh = crate::generators::double_bubble(1.0, 8).unwrap();
+        let c = MaterialCensus::of(&mesh);
+        let expect: Vec<[Label; 2]> = [[0, 1], [0, 2], [1, 2]]
+            .iter()
+            .map(|&[a, b]| [Label::new(a), Label::new(b)])
+            .collect();
+        assert_eq!(c.contacts, expect);
+        assert_eq!(c.contact_changes(&c), ContactChanges::default());
+    }
+
+    #[test]
+    fn contact_changes_count_neighbour_swaps_not_vanished_materials() {
+        // Cells 1..4 around a face 1|2 that shrinks away while 3|4 appears (one T1 made
+        // of its two elementary halves); cell 5 vanishes, taking 5|1 with it.
+        let before = census(
+            &[0, 1, 2, 3, 4, 5],
+            &[[0, 1], [1, 2], [1, 3], [1, 5], [2, 3]],
+        );
+        let after = census(&[0, 1, 2, 3, 4], &[[0, 1], [1, 3], [2, 3], [3, 4]]);
+        assert_eq!(
+            before.contact_changes(&after),
+            ContactChanges { gained: 1, lost: 1 }
+        );
+        assert_eq!(
+            after.contact_changes(&before),
+            ContactChanges { gained: 1, lost: 1 }
+        );
     }
 }

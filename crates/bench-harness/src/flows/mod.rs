@@ -16,7 +16,9 @@
 //!   (RK4 by default, as the Los Topos and El Topo tests do);
 //! - **geometric flows** — [`NormalFlow`] (vertex normals or face offsetting, per
 //!   material-pair speeds, [`cyclic_normal_flow`]) and [`MeanCurvatureFlow`] — depend on
-//!   the surface itself and take one forward Euler step.
+//!   the surface itself and take one forward Euler step (mean curvature flow also has a
+//!   backward Euler scheme, [`McfScheme`], on the shared [`CotanLaplacian`]);
+//!   [`VolumePreservingTension`] adds walls and one volume constraint per bubble.
 //!
 //! [`Schedule`] chains flows in time (the double bubble grows then shrinks; the
 //! curl-noise scene alternates normal flow and noise); [`OneShot`] and
@@ -33,6 +35,7 @@ pub mod curl_noise;
 pub mod cyclic;
 pub mod enright;
 pub mod error;
+pub mod laplacian;
 mod lsq;
 pub mod mean_curvature;
 pub mod normal;
@@ -52,7 +55,8 @@ pub use curl_noise::{CurlNoiseFlow, CurlNoiseParams};
 pub use cyclic::cyclic_normal_flow;
 pub use enright::EnrightFlow;
 pub use error::FlowError;
-pub use mean_curvature::{MeanCurvatureFlow, area_gradient_and_mixed_area};
+pub use laplacian::CotanLaplacian;
+pub use mean_curvature::{McfScheme, MeanCurvatureFlow};
 pub use normal::{JunctionRule, NormalFlow, NormalScheme};
 pub use one_shot::{OneShot, TargetPositions};
 pub use rigid::RigidRotation;
