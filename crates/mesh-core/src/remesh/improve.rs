@@ -264,7 +264,12 @@ pub fn improve_in(
         ImproveRegion::Whole => None,
         ImproveRegion::Around { seeds, degraded } => Some(run.initial_work(mesh, seeds, degraded)),
     };
+    // Seconds per operation, for the debug log below.
+    let mut secs = [0.0f64; 8];
     for _ in 0..params.max_sweeps {
+        if let Some(w) = &work {
+            tracing::debug!(work = w.len(), "improve: sweep");
+        }
         if work.as_ref().is_some_and(Vec::is_empty) {
             run.report.converged = true;
             break;
@@ -272,20 +277,29 @@ pub fn improve_in(
         run.report.sweeps += 1;
         let mut changed = 0;
         if params.split {
+            let t0 = std::time::Instant::now();
             changed += run.split_long_edges(mesh, attrs, &mut recorder, work.as_deref());
+            secs[0] += t0.elapsed().as_secs_f64();
             recorder.extend_work(mesh, &mut work);
         }
         if params.collapse {
+            let t0 = std::time::Instant::now();
             changed += run.collapse_short_edges(mesh, attrs, &mut recorder, work.as_deref());
+            secs[1] += t0.elapsed().as_secs_f64();
             recorder.extend_work(mesh, &mut work);
         }
         if params.flip {
+            let t0 = std::time::Instant::now();
             changed += run.flip_edges(mesh, attrs, &mut recorder, work.as_deref());
+            secs[2] += t0.elapsed().as_secs_f64();
             recorder.extend_work(mesh, &mut work);
         }
         if params.smooth {
+            let t0 = std::time::Instant::now();
             run.smooth(mesh, attrs, &mut recorder, work.as_deref());
+            secs[3] += t0.elapsed().as_secs_f64();
         }
+        let t0 = std::time::Instant::now();
         if params.remove_degenerate {
             let d = remove_degenerate_in(mesh, attrs, &mut recorder, work.as_deref());
             let edits = d.collapsed_removed + d.pairs_relabelled + d.pairs_removed;
@@ -294,6 +308,8 @@ pub fn improve_in(
             add_degenerate(&mut run.report.degenerate, &d);
             recorder.extend_work(mesh, &mut work);
         }
+        secs[4] += t0.elapsed().as_secs_f64();
+        let t0 = std::time::Instant::now();
         if params.separate {
             let s: SeparationReport = separate_irregular_vertices_in(
                 mesh,
@@ -309,19 +325,38 @@ pub fn improve_in(
             run.report.separations_vetoed += s.vetoed;
             recorder.extend_work(mesh, &mut work);
         }
+        secs[5] += t0.elapsed().as_secs_f64();
+        let t0 = std::time::Instant::now();
         if params.pinch {
             let p = pinch_singular_vertices_in(mesh, attrs, &mut recorder, work.as_deref());
             run.touched(p);
             changed += p;
             run.report.pinched += p;
         }
+        secs[6] += t0.elapsed().as_secs_f64();
+        let t0 = std::time::Instant::now();
         // The next sweep settles what this one changed, and only that.
         work = Some(recorder.take_sweep(mesh));
+        secs[7] += t0.elapsed().as_secs_f64();
         if changed == 0 {
             run.report.converged = true;
             break;
         }
     }
+    // Where the time went (`RUST_LOG=mesh_core=debug`): wall seconds per operation,
+    // summed over the sweeps.
+    tracing::debug!(
+        split = secs[0],
+        collapse = secs[1],
+        flip = secs[2],
+        smooth = secs[3],
+        degenerate = secs[4],
+        separate = secs[5],
+        pinch = secs[6],
+        next_work = secs[7],
+        report = ?run.report,
+        "improve: seconds per operation"
+    );
     let (lo, hi) = run.range();
     let edges = run.edges(mesh);
     let (count, inside) = (
@@ -414,8 +449,15 @@ impl<'g> Recorder<'g> {
 }
 
 /// The live vertices among `vertices` and their neighbours, in increasing order, each once.
+///
+/// The notes repeat each vertex many times (every triangle an edit creates names three),
+/// so they are deduplicated before their rings are expanded: expanding first sorted about
+/// twenty entries per note (tens of millions after a sweep of ~10⁵ collapses).
 fn neighbourhood(mesh: &LabeledMesh, vertices: &[VertexId]) -> Vec<VertexId> {
-    let mut out: Vec<VertexId> = vertices
+    let mut unique = vertices.to_vec();
+    unique.par_sort_unstable();
+    unique.dedup();
+    let mut out: Vec<VertexId> = unique
         .par_iter()
         .with_min_len(256)
         .filter(|&&v| mesh.is_vertex_alive(v))
@@ -491,9 +533,18 @@ fn edge_list(mesh: &LabeledMesh) -> Vec<EdgeItem> {
         .collect()
 }
 
-/// Every distinct edge with an end in `work` (increasing, each once), once, in parallel;
-/// `member` is scratch, all false on entry and on return.
-fn edges_at(mesh: &LabeledMesh, work: &[VertexId], member: &mut Vec<bool>) -> Vec<EdgeItem> {
+/// Every distinct edge with an end in `work` (increasing, each once) whose length passes
+/// `keep`, once, in parallel; `member` is scratch, all false on entry and on return.
+///
+/// Why `keep`: splits and collapses want only the few edges outside the length range, and
+/// the length is far cheaper than the edge's star (which deduplicates and classifies it),
+/// so the filter runs first.
+fn edges_at(
+    mesh: &LabeledMesh,
+    work: &[VertexId],
+    member: &mut Vec<bool>,
+    keep: &(impl Fn(f64) -> bool + Sync),
+) -> Vec<EdgeItem> {
     if member.len() < mesh.vertex_capacity() {
         member.resize(mesh.vertex_capacity(), false);
     }
@@ -514,15 +565,22 @@ fn edges_at(mesh: &LabeledMesh, work: &[VertexId], member: &mut Vec<bool>) -> Ve
                     if degenerate {
                         return None;
                     }
-                    let star = features::edge_star(mesh, k);
                     let [a, b] = mesh.corner_edge(k);
+                    let length = mesh.position(a).distance(mesh.position(b));
+                    if !keep(length) {
+                        return None;
+                    }
                     let w = if a == v { b } else { a };
+                    if inside[w.idx()] && w < v {
+                        return None;
+                    }
+                    let star = features::edge_star(mesh, k);
                     // Once per edge: from its lowest-id triangle, and from the lower end
                     // when both ends are in the work list.
-                    (star.min_tri == t && (!inside[w.idx()] || v < w)).then(|| EdgeItem {
+                    (star.min_tri == t).then(|| EdgeItem {
                         a,
                         b,
-                        length: mesh.position(a).distance(mesh.position(b)),
+                        length,
                         feature: star.is_feature(),
                         corner: k,
                     })
@@ -644,11 +702,22 @@ impl<'p> Run<'p> {
         work
     }
 
-    /// The candidate edges of a stage: every edge, or those at the work list.
-    fn candidate_edges(&mut self, mesh: &LabeledMesh, work: Option<&[VertexId]>) -> Vec<EdgeItem> {
+    /// The candidate edges of a stage whose length passes `keep`: of every edge, or of
+    /// those at the work list.
+    fn candidate_edges(
+        &mut self,
+        mesh: &LabeledMesh,
+        work: Option<&[VertexId]>,
+        keep: &(impl Fn(f64) -> bool + Sync),
+    ) -> Vec<EdgeItem> {
         match work {
-            None => self.edges(mesh).to_vec(),
-            Some(w) => edges_at(mesh, w, &mut self.member),
+            None => self
+                .edges(mesh)
+                .iter()
+                .filter(|e| keep(e.length))
+                .copied()
+                .collect(),
+            Some(w) => edges_at(mesh, w, &mut self.member, keep),
         }
     }
 
@@ -694,8 +763,7 @@ impl<'p> Run<'p> {
         work: Option<&[VertexId]>,
     ) -> usize {
         let (_, hi) = self.range();
-        let mut candidates = self.candidate_edges(mesh, work);
-        candidates.retain(|e| e.length > hi);
+        let mut candidates = self.candidate_edges(mesh, work, &|l| l > hi);
         candidates.par_sort_unstable_by(|x, y| {
             y.length
                 .total_cmp(&x.length)
@@ -740,8 +808,7 @@ impl<'p> Run<'p> {
         work: Option<&[VertexId]>,
     ) -> usize {
         let (lo, _) = self.range();
-        let mut candidates = self.candidate_edges(mesh, work);
-        candidates.retain(|e| e.length < lo);
+        let mut candidates = self.candidate_edges(mesh, work, &|l| l < lo);
         candidates.par_sort_unstable_by(|x, y| {
             x.length
                 .total_cmp(&y.length)
@@ -795,7 +862,7 @@ impl<'p> Run<'p> {
         };
         let snapshot: &LabeledMesh = mesh;
         let mut candidates: Vec<(f64, VertexId, VertexId)> = self
-            .candidate_edges(snapshot, work)
+            .candidate_edges(snapshot, work, &|_| true)
             .par_iter()
             .filter(|e| !e.feature)
             .filter_map(|e| {

@@ -81,11 +81,120 @@ impl Ord for Item {
 /// keeping what it has.
 const UPDATES_PER_NODE: usize = 64;
 
+/// The nodes a march runs over, as [`march_over`] needs them.
+pub trait Nodes {
+    /// Number of nodes.
+    fn len(&self) -> usize;
+    /// True without nodes.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// Calls `offer(j, position of j)` for every stencil neighbour `j` of node `i`, in
+    /// [`OFFSETS`] order.
+    fn for_each_neighbour(&self, i: u32, offer: impl FnMut(u32, DVec3));
+    /// Position of node `i`.
+    fn position(&self, i: u32) -> DVec3;
+}
+
+/// What a node holds during a march: its nearest point so far (an index into the
+/// points) and the distance to it. One 16-byte slot per node, so that a neighbour costs
+/// one memory access (the stencil touches 9 lattice rows per pop).
+#[derive(Clone, Copy, Debug)]
+pub struct Slot {
+    /// Distance to `point` (meaningless while `point` is [`Slot::NONE`] or [`Slot::CLOSED`]).
+    pub distance: f64,
+    /// Index of the nearest point, [`Slot::NONE`] or [`Slot::CLOSED`].
+    pub point: u32,
+}
+
+impl Slot {
+    /// An open node no point has reached.
+    pub const NONE: u32 = u32::MAX;
+    /// A closed node: never entered or changed.
+    pub const CLOSED: u32 = u32::MAX - 1;
+    /// The slot of an open node.
+    pub const OPEN: Slot = Slot {
+        distance: f64::INFINITY,
+        point: Slot::NONE,
+    };
+    /// The slot of a closed node.
+    pub const SHUT: Slot = Slot {
+        distance: f64::INFINITY,
+        point: Slot::CLOSED,
+    };
+}
+
+/// Marches from `seeds` (`(node, index into points)`) over the nodes whose slot is open
+/// ([`Slot::OPEN`] or already reached), improving `slots`. Returns the number of updates.
+///
+/// Same propagation as [`march`] (which wraps it): nodes finalised in order of
+/// (distance, node), neighbours offered the point in [`OFFSETS`] order, a strictly
+/// nearer point replaces the current one.
+pub fn march_over(
+    nodes: &impl Nodes,
+    points: &[BreakingPoint],
+    seeds: impl Iterator<Item = (u32, u32)>,
+    slots: &mut [Slot],
+) -> usize {
+    let mut heap = BinaryHeap::new();
+    let mut updates = 0usize;
+    #[inline(always)]
+    fn offer(
+        heap: &mut BinaryHeap<Item>,
+        slots: &mut [Slot],
+        updates: &mut usize,
+        j: u32,
+        at: DVec3,
+        point: u32,
+        position: DVec3,
+    ) {
+        let slot = &mut slots[j as usize];
+        if slot.point == Slot::CLOSED {
+            return;
+        }
+        let distance = at.distance(position);
+        if slot.point == Slot::NONE || distance < slot.distance {
+            *slot = Slot { distance, point };
+            heap.push(Item { distance, node: j });
+            *updates += 1;
+        }
+    }
+    for (i, point) in seeds {
+        if (i as usize) < slots.len() {
+            let at = nodes.position(i);
+            offer(
+                &mut heap,
+                slots,
+                &mut updates,
+                i,
+                at,
+                point,
+                points[point as usize].position,
+            );
+        }
+    }
+    let budget = heap.len() + UPDATES_PER_NODE * nodes.len();
+    for _ in 0..budget {
+        let Some(Item { distance, node }) = heap.pop() else {
+            break;
+        };
+        let cur = slots[node as usize];
+        if cur.point >= Slot::CLOSED || cur.distance < distance {
+            continue; // stale entry
+        }
+        let position = points[cur.point as usize].position;
+        nodes.for_each_neighbour(node, |j, at| {
+            offer(&mut heap, slots, &mut updates, j, at, cur.point, position);
+        });
+    }
+    updates
+}
+
 /// Marches from `seeds` (`(node, breaking point)`) over the nodes with `open[node]`,
 /// improving `best`; `neighbours(i, out)` writes the stencil neighbours of node `i` into
 /// `out` and returns how many. Returns the number of updates made.
 ///
-/// Closed nodes are never entered or changed. Allocation-free apart from the heap.
+/// Closed nodes are never entered or changed. A convenience over [`march_over`].
 pub fn march(
     positions: &[DVec3],
     open: &[bool],
@@ -93,41 +202,58 @@ pub fn march(
     seeds: impl Iterator<Item = (u32, BreakingPoint)>,
     best: &mut [Option<Nearest>],
 ) -> usize {
-    let mut heap = BinaryHeap::new();
-    let mut updates = 0usize;
-    let mut offer = |heap: &mut BinaryHeap<Item>,
-                     best: &mut [Option<Nearest>],
-                     j: u32,
-                     point: BreakingPoint| {
-        let distance = positions[j as usize].distance(point.position);
-        if best[j as usize].is_none_or(|b| distance < b.distance) {
-            best[j as usize] = Some(Nearest { point, distance });
-            heap.push(Item { distance, node: j });
-            updates += 1;
+    struct Listed<'a, F> {
+        positions: &'a [DVec3],
+        neighbours: &'a F,
+    }
+    impl<F: Fn(u32, &mut [u32; STENCIL]) -> usize> Nodes for Listed<'_, F> {
+        fn len(&self) -> usize {
+            self.positions.len()
         }
-    };
-    for (i, point) in seeds {
-        if open.get(i as usize).copied().unwrap_or(false) {
-            offer(&mut heap, best, i, point);
+        fn for_each_neighbour(&self, i: u32, mut offer: impl FnMut(u32, DVec3)) {
+            let mut nb = [0u32; STENCIL];
+            let k = (self.neighbours)(i, &mut nb);
+            for &j in &nb[..k] {
+                offer(j, self.positions[j as usize]);
+            }
+        }
+        fn position(&self, i: u32) -> DVec3 {
+            self.positions[i as usize]
         }
     }
-    let budget = heap.len() + UPDATES_PER_NODE * positions.len();
-    let mut nb = [0u32; STENCIL];
-    for _ in 0..budget {
-        let Some(Item { distance, node }) = heap.pop() else {
-            break;
-        };
-        let Some(cur) = best[node as usize] else {
-            continue;
-        };
-        if cur.distance < distance {
-            continue; // stale entry
-        }
-        let k = neighbours(node, &mut nb);
-        for &j in &nb[..k] {
-            if open[j as usize] {
-                offer(&mut heap, best, j, cur.point);
+    let mut points: Vec<BreakingPoint> = best.iter().flatten().map(|b| b.point).collect();
+    let mut slots: Vec<Slot> = Vec::with_capacity(best.len());
+    let mut known = 0u32;
+    for (i, b) in best.iter().enumerate() {
+        slots.push(match (open.get(i).copied().unwrap_or(false), b) {
+            (false, _) => Slot::SHUT,
+            (true, Some(b)) => {
+                known += 1;
+                Slot {
+                    distance: b.distance,
+                    point: known - 1,
+                }
             }
+            (true, None) => Slot::OPEN,
+        });
+    }
+    let seeds: Vec<(u32, u32)> = seeds
+        .map(|(i, p)| {
+            points.push(p);
+            (i, points.len() as u32 - 1)
+        })
+        .collect();
+    let nodes = Listed {
+        positions,
+        neighbours,
+    };
+    let updates = march_over(&nodes, &points, seeds.into_iter(), &mut slots);
+    for (b, s) in best.iter_mut().zip(&slots) {
+        if s.point < Slot::CLOSED {
+            *b = Some(Nearest {
+                point: points[s.point as usize],
+                distance: s.distance,
+            });
         }
     }
     updates

@@ -236,6 +236,8 @@ pub fn correct_labels_with(
         ));
     }
     let lattice = *grid.lattice();
+    let clock = std::time::Instant::now();
+    let mut phase = [0.0f64; 5];
 
     // Region nodes, in lattice order.
     let (nodes, index) =
@@ -245,6 +247,7 @@ pub fn correct_labels_with(
         .map(|&p| physical_status(grid, materials, p))
         .collect();
     let idx = |p: IVec3| index.get(p).map(|i| i as usize);
+    phase[0] = clock.elapsed().as_secs_f64();
 
     // Breaking points and crossing data on every edge of a flawed cell: edge (n, a) for
     // every region node n whose +a neighbour is a region node and which borders a flawed
@@ -307,14 +310,12 @@ pub fn correct_labels_with(
         )
     });
     stats.breaking_points = points.len();
+    phase[1] = clock.elapsed().as_secs_f64();
 
     // Fast marching from the breaking points. Physical nodes relay the nearest point
     // without taking its label: a breaking point between two physical ends (a mixed
     // stretch inside one edge) or across a physical node may still be the nearest one.
-    let positions: Vec<DVec3> = nodes.iter().map(|&n| lattice.node_position(n)).collect();
     let open: Vec<bool> = status.iter().map(Option::is_none).collect();
-    let all = vec![true; nodes.len()];
-    let mut best: Vec<Option<march::Nearest>> = vec![None; nodes.len()];
     let neighbours = |i: u32, out: &mut [u32; march::STENCIL]| {
         let p = nodes[i as usize];
         let mut k = 0;
@@ -326,20 +327,30 @@ pub fn correct_labels_with(
         }
         k
     };
-    let seeds = points.iter().flat_map(|(e, bp)| {
+    let bps: Vec<BreakingPoint> = points.iter().map(|p| p.1).collect();
+    let seeds = points.iter().enumerate().flat_map(|(k, (e, _))| {
         [e.node, e.end()]
             .into_iter()
-            .filter_map(|n| idx(n).map(|i| (i as u32, *bp)))
+            .filter_map(move |n| idx(n).map(|i| (i as u32, k as u32)))
     });
+    let mut slots = vec![march::Slot::OPEN; nodes.len()];
     if open.iter().any(|&o| o) {
-        stats.updates += march::march(&positions, &all, &neighbours, seeds, &mut best);
+        let region = RegionNodes::new(&nodes, &index, &lattice);
+        stats.updates += march::march_over(&region, &bps, seeds, &mut slots);
     }
-    for (b, &o) in best.iter_mut().zip(&open) {
-        if !o {
-            *b = None;
-        }
-    }
+    let mut best: Vec<Option<march::Nearest>> = slots
+        .iter()
+        .zip(&open)
+        .map(|(s, &o)| {
+            (o && s.point < march::Slot::CLOSED).then(|| march::Nearest {
+                point: bps[s.point as usize],
+                distance: s.distance,
+            })
+        })
+        .collect();
+    drop(slots);
     stats.marched_nodes = best.iter().filter(|b| b.is_some()).count();
+    phase[2] = clock.elapsed().as_secs_f64();
 
     // Fallback: components no breaking point reached take the nearest physical label
     // (with `NearestVertex`, every non-physical node does; its breaking point, where
@@ -356,6 +367,7 @@ pub fn correct_labels_with(
         .map(|(&o, b)| o && b.is_none())
         .collect();
     if unreached.iter().any(|&u| u) {
+        let positions: Vec<DVec3> = nodes.iter().map(|&n| lattice.node_position(n)).collect();
         let mut fallback: Vec<Option<march::Nearest>> = vec![None; nodes.len()];
         let mut seeds: Vec<(u32, BreakingPoint)> = Vec::new();
         let mut nb = [0u32; march::STENCIL];
@@ -393,6 +405,7 @@ pub fn correct_labels_with(
         }
     }
 
+    phase[3] = clock.elapsed().as_secs_f64();
     let entries: Vec<NodeEntry> = status
         .iter()
         .zip(&best)
@@ -419,14 +432,96 @@ pub fn correct_labels_with(
         .zip(&best)
         .filter(|(s, b)| s.is_none() && b.is_none())
         .count();
+    phase[4] = clock.elapsed().as_secs_f64();
+    // Where the time went (`RUST_LOG=grid_tracker=debug`): seconds since the start at the
+    // end of each phase.
+    tracing::debug!(
+        nodes = phase[0],
+        breaking_points = phase[1],
+        march = phase[2],
+        fallback = phase[3],
+        entries = phase[4],
+        dense = matches!(index, NodeIndex::Dense { .. }),
+        ?stats,
+        "labels: seconds at the end of each phase"
+    );
     Ok(NodeLabels {
         index,
         nodes,
         entries,
         edges,
-        breaking_points: points.into_iter().map(|p| p.1).collect(),
+        breaking_points: bps,
         stats,
     })
+}
+
+/// The region's nodes as the marching sees them: stencil neighbours looked up in the
+/// node index, positions computed from lattice coordinates (no per-node position array).
+/// For a dense index and a node away from the box's faces, the 26 neighbours are fixed
+/// offsets into the box array, without bounds checks.
+struct RegionNodes<'a> {
+    nodes: &'a [IVec3],
+    index: &'a NodeIndex,
+    lattice: &'a crate::stages::grid::Lattice,
+    /// Box-array offsets of [`march::OFFSETS`] (dense index only).
+    deltas: [isize; march::STENCIL],
+}
+
+impl<'a> RegionNodes<'a> {
+    fn new(
+        nodes: &'a [IVec3],
+        index: &'a NodeIndex,
+        lattice: &'a crate::stages::grid::Lattice,
+    ) -> Self {
+        let mut deltas = [0isize; march::STENCIL];
+        if let NodeIndex::Dense { dims, .. } = index {
+            let (dx, dy) = (dims.x as isize, dims.y as isize);
+            for (k, d) in march::OFFSETS.iter().enumerate() {
+                deltas[k] = d.x as isize + dx * (d.y as isize + dy * d.z as isize);
+            }
+        }
+        RegionNodes {
+            nodes,
+            index,
+            lattice,
+            deltas,
+        }
+    }
+}
+
+impl march::Nodes for RegionNodes<'_> {
+    fn len(&self) -> usize {
+        self.nodes.len()
+    }
+
+    #[inline]
+    fn for_each_neighbour(&self, i: u32, mut offer: impl FnMut(u32, DVec3)) {
+        let p = self.nodes[i as usize];
+        if let NodeIndex::Dense { lo, dims, index } = self.index {
+            let d = p - *lo;
+            if d.cmpgt(IVec3::ZERO).all() && d.cmplt(*dims - IVec3::ONE).all() {
+                let base = d.x as isize
+                    + dims.x as isize * (d.y as isize + dims.y as isize * d.z as isize);
+                for (k, &delta) in self.deltas.iter().enumerate() {
+                    let j = index[(base + delta) as usize];
+                    if j != nodes::NONE {
+                        offer(j, self.lattice.node_position(p + march::OFFSETS[k]));
+                    }
+                }
+                return;
+            }
+        }
+        for d in march::OFFSETS {
+            if let Some(j) = self.index.get(p + d) {
+                offer(j, self.lattice.node_position(p + d));
+            }
+        }
+    }
+
+    #[inline]
+    fn position(&self, i: u32) -> DVec3 {
+        self.lattice.node_position(self.nodes[i as usize])
+    }
 }
 
 #[cfg(test)]

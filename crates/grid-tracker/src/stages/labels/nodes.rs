@@ -18,7 +18,7 @@ use crate::stages::rebuild::cell_corners;
 const DENSE_RATIO: usize = 8;
 
 /// Marks a box entry that is no region node.
-const NONE: u32 = u32::MAX;
+pub(crate) const NONE: u32 = u32::MAX;
 
 /// Region nodes by lattice coordinate.
 #[derive(Clone, Debug)]

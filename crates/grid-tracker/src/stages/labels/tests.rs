@@ -238,3 +238,40 @@ fn region_nodes_are_the_sorted_corners_dense_or_sparse() {
         assert_eq!(labels.stats().unreached_nodes, 0);
     }
 }
+
+/// The marching's view of the region: for a dense index (interior nodes through fixed
+/// box offsets) and a sparse one, every node's neighbours and positions are exactly what
+/// the lattice and the index give, in stencil order.
+#[test]
+fn region_nodes_list_the_stencil_neighbours_in_order() {
+    use march::Nodes;
+    let pair = |x: f64, l: u32| {
+        [
+            sphere(2, DVec3::new(x - 0.4, 0.0, 0.0), 0.6, 0, l),
+            sphere(2, DVec3::new(x + 0.4, 0.0, 0.0), 0.6, 0, l + 1),
+        ]
+    };
+    let near = union(&pair(0.0, 1));
+    let far = union(&[pair(0.0, 1), pair(30.0, 3)].concat());
+    for (mesh, dense) in [(near, true), (far, false)] {
+        let r = run(&mesh, 0.2, false);
+        let (nodes, index) = region_nodes(&r.region).unwrap();
+        assert_eq!(matches!(index, NodeIndex::Dense { .. }), dense);
+        let lattice = *r.grid.lattice();
+        let view = RegionNodes::new(&nodes, &index, &lattice);
+        assert_eq!(view.len(), nodes.len());
+        let mut interior = 0;
+        for (i, &p) in nodes.iter().enumerate() {
+            let mut got = Vec::new();
+            view.for_each_neighbour(i as u32, |j, at| got.push((j, at)));
+            let want: Vec<(u32, DVec3)> = march::OFFSETS
+                .iter()
+                .filter_map(|&d| index.get(p + d).map(|j| (j, lattice.node_position(p + d))))
+                .collect();
+            assert_eq!(got, want, "node {p}");
+            assert_eq!(view.position(i as u32), lattice.node_position(p));
+            interior += usize::from(got.len() == march::STENCIL);
+        }
+        assert!(interior > 0, "some nodes have all 26 neighbours");
+    }
+}
