@@ -346,12 +346,8 @@ pub(crate) fn unflatten(x: &[f64]) -> Vec<DVec3> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::flows::test_meshes::{icosphere, triple_fan};
+    use crate::flows::test_meshes::{icosphere, outside_inside, triple_fan};
     use mesh_core::Label;
-
-    fn labels() -> [Label; 2] {
-        [Label::new(0), Label::new(1)]
-    }
 
     #[test]
     fn laplacian_of_the_positions_is_the_area_gradient() {
@@ -409,7 +405,7 @@ mod tests {
     #[test]
     fn mixed_areas_tile_the_surface_and_the_sphere_has_curvature_two_over_r() {
         let r = 1.3;
-        let mesh = icosphere(3, r, labels());
+        let mesh = icosphere(3, r, outside_inside());
         let lap = CotanLaplacian::of(&mesh);
         let total: f64 = lap.mass().iter().sum();
         let exact: f64 = mesh

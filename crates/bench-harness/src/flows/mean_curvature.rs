@@ -157,18 +157,14 @@ impl Flow for MeanCurvatureFlow {
 mod tests {
     use super::*;
     use crate::flows::laplacian::CotanLaplacian;
-    use crate::flows::test_meshes::{icosphere, radius_stats, triple_fan};
+    use crate::flows::test_meshes::{icosphere, outside_inside, radius_stats, triple_fan};
     use mesh_core::Label;
-
-    fn labels() -> [Label; 2] {
-        [Label::new(0), Label::new(1)]
-    }
 
     #[test]
     fn sphere_shrinks_at_two_over_r() {
         let flow = MeanCurvatureFlow::default();
         let r0 = 0.5;
-        let mut mesh = icosphere(3, r0, labels());
+        let mut mesh = icosphere(3, r0, outside_inside());
         let v = flow.velocities(&mesh);
         let radial: Vec<f64> = mesh
             .vertices()
@@ -203,8 +199,8 @@ mod tests {
     #[test]
     fn stable_dt_scales_with_edge_length_squared() {
         let flow = MeanCurvatureFlow::default();
-        let coarse = flow.stable_dt(&icosphere(2, 1.0, labels()));
-        let fine = flow.stable_dt(&icosphere(3, 1.0, labels()));
+        let coarse = flow.stable_dt(&icosphere(2, 1.0, outside_inside()));
+        let fine = flow.stable_dt(&icosphere(3, 1.0, outside_inside()));
         // Halving the edges quarters the step (up to the changing shapes near the poles).
         assert!((coarse / fine - 4.0).abs() < 0.6, "{coarse} / {fine}");
         // A regular-ish mesh of edge h: roughly h²/4 (h ≈ 0.39 at level 2).
@@ -213,7 +209,7 @@ mod tests {
         // Within the bound the sphere shrinks smoothly; far beyond it the highest
         // frequency is amplified every step and the surface roughens.
         let roughness = |factor: f64| {
-            let mut mesh = icosphere(2, 1.0, labels());
+            let mut mesh = icosphere(2, 1.0, outside_inside());
             for _ in 0..6 {
                 let dt = factor * flow.stable_dt(&mesh);
                 let p = flow.propose(&mesh, 0.0, dt);
@@ -260,7 +256,7 @@ mod tests {
         // hundred times the forward Euler bound. Measured: r within 1.5e-5 of that at
         // 100×, spread 1.4e-3 r.
         let r0 = 0.5;
-        let mesh = icosphere(3, r0, labels());
+        let mesh = icosphere(3, r0, outside_inside());
         let explicit = MeanCurvatureFlow::default();
         let flow = explicit.with_scheme(McfScheme::BackwardEuler);
         assert_eq!(flow.max_stable_dt(&mesh), None);
@@ -279,7 +275,7 @@ mod tests {
         // frequency every step (0.76 of the radius, `stable_dt_scales_…`), backward Euler
         // damps it.
         let roughness = |flow: &MeanCurvatureFlow| {
-            let mut mesh = icosphere(2, 1.0, labels());
+            let mut mesh = icosphere(2, 1.0, outside_inside());
             for _ in 0..6 {
                 let dt = 4.0 * explicit.stable_dt(&mesh);
                 let p = flow.propose(&mesh, 0.0, dt);
@@ -296,7 +292,7 @@ mod tests {
     fn backward_euler_agrees_with_forward_euler_to_second_order_in_dt() {
         // x'_BE − x'_FE = O(dt²): halving dt quarters the difference. A mesh off the
         // sphere (radially perturbed) so the difference is not trivially zero.
-        let mut mesh = icosphere(2, 1.0, labels());
+        let mut mesh = icosphere(2, 1.0, outside_inside());
         for v in mesh.vertices().collect::<Vec<_>>() {
             let p = mesh.position(v);
             mesh.set_position(v, p * (1.0 + 0.1 * (5.0 * p.x).sin() * p.y));
@@ -322,7 +318,7 @@ mod tests {
 
     #[test]
     fn backward_euler_keeps_held_coordinates_exactly() {
-        let mesh = icosphere(2, 1.0, labels());
+        let mesh = icosphere(2, 1.0, outside_inside());
         let lap = CotanLaplacian::of(&mesh);
         // Hold z of the upper half, and all of vertex 0.
         let mut held: Vec<u8> = mesh

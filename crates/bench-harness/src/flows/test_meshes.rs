@@ -6,6 +6,11 @@ use std::collections::HashMap;
 use glam::DVec3;
 use mesh_core::{Label, LabeledMesh};
 
+/// Outside 0, inside 1: the labels of the one-material test spheres.
+pub fn outside_inside() -> [Label; 2] {
+    [Label::new(0), Label::new(1)]
+}
+
 /// A sphere of radius `r` about the origin: an octahedron subdivided `levels` times by
 /// edge midpoints projected to the sphere (`8·4^levels` triangles), normals outward, so
 /// `labels = [outside, inside]`.

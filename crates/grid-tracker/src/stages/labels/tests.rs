@@ -209,10 +209,10 @@ fn marching_takes_the_nearest_point_along_a_chain() {
     assert!(best[..3].iter().all(Option::is_some) && best[3..].iter().all(Option::is_none));
 }
 
-/// Two overlaps far apart: a region much sparser than its bounding box takes the hashed
-/// index, a single overlap the dense one; both list exactly the sorted corners.
-#[test]
-fn region_nodes_are_the_sorted_corners_dense_or_sparse() {
+/// One overlap of two spheres (its region takes the dense node index), and two such
+/// overlaps 30 apart (much sparser than its bounding box: the hashed index), with whether
+/// the index is dense.
+fn near_and_far_overlaps() -> [(LabeledMesh, bool); 2] {
     let pair = |x: f64, l: u32| {
         [
             sphere(2, DVec3::new(x - 0.4, 0.0, 0.0), 0.6, 0, l),
@@ -221,7 +221,14 @@ fn region_nodes_are_the_sorted_corners_dense_or_sparse() {
     };
     let near = union(&pair(0.0, 1));
     let far = union(&[pair(0.0, 1), pair(30.0, 3)].concat());
-    for (mesh, dense) in [(near, true), (far, false)] {
+    [(near, true), (far, false)]
+}
+
+/// Two overlaps far apart: a region much sparser than its bounding box takes the hashed
+/// index, a single overlap the dense one; both list exactly the sorted corners.
+#[test]
+fn region_nodes_are_the_sorted_corners_dense_or_sparse() {
+    for (mesh, dense) in near_and_far_overlaps() {
         let r = run(&mesh, 0.2, false);
         let (nodes, index) = region_nodes(&r.region).unwrap();
         assert_eq!(matches!(index, NodeIndex::Dense { .. }), dense);
@@ -245,15 +252,7 @@ fn region_nodes_are_the_sorted_corners_dense_or_sparse() {
 #[test]
 fn region_nodes_list_the_stencil_neighbours_in_order() {
     use march::Nodes;
-    let pair = |x: f64, l: u32| {
-        [
-            sphere(2, DVec3::new(x - 0.4, 0.0, 0.0), 0.6, 0, l),
-            sphere(2, DVec3::new(x + 0.4, 0.0, 0.0), 0.6, 0, l + 1),
-        ]
-    };
-    let near = union(&pair(0.0, 1));
-    let far = union(&[pair(0.0, 1), pair(30.0, 3)].concat());
-    for (mesh, dense) in [(near, true), (far, false)] {
+    for (mesh, dense) in near_and_far_overlaps() {
         let r = run(&mesh, 0.2, false);
         let (nodes, index) = region_nodes(&r.region).unwrap();
         assert_eq!(matches!(index, NodeIndex::Dense { .. }), dense);
