@@ -103,6 +103,16 @@ pub const PRESETS: &[Preset] = &[
         fixed: &[],
     },
     Preset {
+        name: "volume",
+        summary: "collision: volume-conserving remeshing edits (smoothing, collapses, flips) vs El Topo's Ω bound alone, the default",
+        backends: COLLISION,
+        settings: &[
+            ("conserving", &["collision.conserve_volume=true"]),
+            ("bounded", &["collision.conserve_volume=false"]),
+        ],
+        fixed: &[],
+    },
+    Preset {
         name: "t1",
         summary: "collision: T1 vertex separation on/off (Los Topos §5)",
         backends: COLLISION,

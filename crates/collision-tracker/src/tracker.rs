@@ -154,6 +154,7 @@ fn configure(params: &CollisionParams, l: f64) -> StepConfig {
         // Operations"): the t1t2 stage does it, once, over the whole mesh.
         separate: false,
         pinch: false,
+        conserve_volume: params.conserve_volume,
         ..defaults
     };
     let t1t2 = T1T2Options {

@@ -204,6 +204,7 @@ mod improve_serde {
         flip_criterion: Flip,
         flip_min_improvement: f64,
         min_normal_cos: f64,
+        conserve_volume: bool,
         feature_rank_ratio: f64,
         feature_curve_corner_angle_deg: f64,
         separation_fraction: f64,
@@ -242,6 +243,7 @@ mod improve_serde {
                 },
                 flip_min_improvement: p.flip_min_improvement,
                 min_normal_cos: p.min_normal_cos,
+                conserve_volume: p.conserve_volume,
                 feature_rank_ratio: p.features.rank_ratio,
                 feature_curve_corner_angle_deg: p.features.curve_corner_angle_deg,
                 separation_fraction: p.separation.separation_fraction,
@@ -276,6 +278,7 @@ mod improve_serde {
                 },
                 flip_min_improvement: m.flip_min_improvement,
                 min_normal_cos: m.min_normal_cos,
+                conserve_volume: m.conserve_volume,
                 features: FeatureParams {
                     rank_ratio: m.feature_rank_ratio,
                     curve_corner_angle_deg: m.feature_curve_corner_angle_deg,

@@ -6,7 +6,10 @@
 //! both `a` and `b` to that position.
 //!
 //! **Where the merged vertex goes** depends on the endpoints' [`VertexKind`]s: two smooth
-//! vertices meet at the midpoint; a feature vertex (ridge, corner, curve) keeps its place
+//! vertices meet at the midpoint, shifted along their normal by what keeps every label's
+//! volume (`conserve_volume`; the midpoint alone sits on the chord and shaves a sliver
+//! off every convex patch, which over a long run is most of the volume remeshing loses);
+//! a feature vertex (ridge, corner, curve) keeps its place
 //! against a smooth one; two ridge vertices merge at the midpoint only along their ridge;
 //! two vertices of a feature curve merge only along a curve edge, onto one endpoint, so
 //! the curve keeps its vertices exactly. Everything else is refused.
@@ -48,6 +51,10 @@ pub struct CollapseParams {
     /// Skip the link condition (duplicate triangles may result, for T2 removal to
     /// resolve). Default false.
     pub allow_degenerate: bool,
+    /// Move a midpoint collapse of two smooth vertices along their normal by what keeps
+    /// every label's volume (see the module doc). Default false (see
+    /// [`super::ImproveParams::conserve_volume`]).
+    pub conserve_volume: bool,
 }
 
 impl Default for CollapseParams {
@@ -59,6 +66,7 @@ impl Default for CollapseParams {
             min_normal_cos: 0.5,
             ridge_alignment_cos: 30f64.to_radians().cos(),
             allow_degenerate: false,
+            conserve_volume: false,
         }
     }
 }
@@ -210,7 +218,7 @@ pub(crate) fn collapse_edge_in(
     let ka = features::classify_vertex(mesh, a, &params.features);
     let kb = features::classify_vertex(mesh, b, &params.features);
     let t = placement(ka, kb, curve_edge, (pb - pa).normalize_or_zero(), params)?;
-    let target = if t == 0.0 {
+    let mut target = if t == 0.0 {
         pa
     } else if t == 1.0 {
         pb
@@ -255,6 +263,19 @@ pub(crate) fn collapse_edge_in(
     });
     edit.remove_vertices.push(b);
 
+    if let (true, VertexKind::Smooth { normal: na }, VertexKind::Smooth { normal: nb }) =
+        (params.conserve_volume, ka, kb)
+    {
+        // Two smooth vertices meet at the midpoint, a chord below (or above) the surface
+        // they sampled: the shift puts the merged vertex where the volume is kept. A
+        // quarter of the edge bounds it; beyond that the patch is not smooth enough for
+        // the shift to be the surface, and the Ω check decides as before.
+        let normal = na + nb * na.dot(nb).signum();
+        let reach = 0.25 * pa.distance(pb);
+        if features::conserve_volume_along(mesh, edit, normal, reach, &mut s.volumes).is_some() {
+            target = edit.moves[0].end;
+        }
+    }
     check_geometry(edit, mesh, a, b, target, params)?;
     let dv = features::max_label_volume_change(mesh, edit, &mut s.volumes);
     if dv > params.max_volume_change {

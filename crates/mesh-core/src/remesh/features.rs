@@ -415,6 +415,58 @@ pub(crate) fn max_label_volume_change(
     buf.iter().fold(0.0, |m, e| m.max(e.1.abs()))
 }
 
+/// Shifts the end positions of all of `edit`'s moves by one common offset along `dir` so
+/// that no label's volume changes, and returns the shift (`None`, with the edit
+/// untouched, when that is not possible within `max_shift`).
+///
+/// Why it is exact: with every other vertex fixed, each label's enclosed volume is an
+/// affine function of the one position the moves share (a cone volume is linear in each
+/// of its corners), so two evaluations give the slope along `dir` and the root is the
+/// shift. An edit between exactly two labels has one volume to keep (the other changes by
+/// its negative); an edit touching more labels is left alone, as is one whose volume does
+/// not depend on the shift (slope below rounding). Used by smoothing and by midpoint
+/// collapses on smooth patches, so that remeshing stops feeding volume drift (El Topo
+/// bounds each edit's change by Ω; this removes it to rounding where the surface allows).
+pub(crate) fn conserve_volume_along(
+    mesh: &LabeledMesh,
+    edit: &mut Edit,
+    dir: DVec3,
+    max_shift: f64,
+    buf: &mut Vec<(Label, f64)>,
+) -> Option<f64> {
+    let usable = max_shift > 0.0 && dir.is_finite() && dir != DVec3::ZERO;
+    if edit.moves.is_empty() || !usable {
+        return None;
+    }
+    let dir = dir.normalize();
+    max_label_volume_change(mesh, edit, buf);
+    let (label, dv0) = match buf.as_slice() {
+        [] => return Some(0.0),
+        [(_, dv), (_, _)] if *dv == 0.0 => return Some(0.0),
+        [(l, dv), (_, _)] => (*l, *dv),
+        _ => return None,
+    };
+    let shift_all = |edit: &mut Edit, by: DVec3| edit.moves.iter_mut().for_each(|m| m.end += by);
+    // A probe step of the size the shift may take: the volume is affine, so the size only
+    // sets the rounding of the slope.
+    let h = max_shift;
+    shift_all(edit, h * dir);
+    max_label_volume_change(mesh, edit, buf);
+    let dv1 = buf.iter().find(|e| e.0 == label).map_or(0.0, |e| e.1);
+    let slope = (dv1 - dv0) / h;
+    let s = -dv0 / slope;
+    if slope.is_finite()
+        && slope.abs() > 1e-12 * (dv0.abs() + dv1.abs()) / h
+        && s.abs() <= max_shift
+    {
+        shift_all(edit, (s - h) * dir);
+        Some(s)
+    } else {
+        shift_all(edit, -h * dir);
+        None
+    }
+}
+
 /// Unit-free cosine of the angle between the normals of two triangles, or `None` when
 /// either is degenerate.
 #[inline]
@@ -474,6 +526,49 @@ mod tests {
         ];
         let labels = [[2, 1], [0, 1], [0, 1], [0, 1], [2, 0], [2, 0], [2, 0]];
         LabeledMesh::from_raw(p, &tris, &labels).expect("valid arrays")
+    }
+
+    /// A tangential move of one sphere vertex changes the volume; the conserving shift
+    /// along the normal cancels it to rounding. At a vertex where three materials meet
+    /// there are two volumes to keep and one shift: the edit is left alone.
+    #[test]
+    fn conserving_shift_cancels_a_moves_volume_change() {
+        let m = crate::generators::icosphere(2, DVec3::ZERO, 1.0, [Label::new(0), Label::new(1)])
+            .expect("sphere");
+        // Not one of the icosahedron's 12 vertices: their neighbours are coplanar, and a
+        // move parallel to that plane keeps the fan's volume exactly.
+        let v = VertexId::new(30);
+        let p = m.position(v);
+        let tangent = p.any_orthonormal_vector();
+        let start = p + 0.1 * tangent + 0.01 * p;
+        let mut edit = Edit::default();
+        edit.moves.push(super::super::edit::VertexMove {
+            vertex: v,
+            end: start,
+            blend: None,
+        });
+        let mut buf = Vec::new();
+        let before = max_label_volume_change(&m, &edit, &mut buf);
+        assert!(before > 1e-5, "{before}");
+        let shift = conserve_volume_along(&m, &mut edit, p, 0.1, &mut buf).expect("a shift");
+        assert!(shift != 0.0 && shift.abs() < 0.05, "small: {shift}");
+        let end = edit.moves[0].end;
+        assert!((end - (start + shift * p.normalize())).length() < 1e-15);
+        assert!(max_label_volume_change(&m, &edit, &mut buf) < 1e-15);
+
+        let m = tetra_pair();
+        let v = VertexId::new(0);
+        let start = m.position(v) + DVec3::new(0.1, 0.1, 0.05);
+        edit.moves[0] = super::super::edit::VertexMove {
+            vertex: v,
+            end: start,
+            blend: None,
+        };
+        assert_eq!(
+            conserve_volume_along(&m, &mut edit, DVec3::Z, 0.1, &mut buf),
+            None
+        );
+        assert_eq!(edit.moves[0].end, start);
     }
 
     #[test]

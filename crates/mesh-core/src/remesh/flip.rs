@@ -12,6 +12,15 @@
 //! and, on a closed surface, a degenerate tetrahedron), when it does not improve the
 //! criterion by a minimum amount (so an edge never flips back and forth), when a triangle
 //! would invert, and when it changes a label volume by more than Ω.
+//!
+//! **Volume.** Re-triangulating a non-planar quad adds or removes the tetrahedron
+//! `a b x y`. With `conserve_volume`, when neither end of the new edge is on a feature curve,
+//! they are shifted together along the quad's normal by what cancels that change (a label
+//! volume is affine in a common shift of any set of vertices, so the shift is exact); a
+//! flip whose shift would fold a triangle is made without it, under the Ω limit as before.
+//! Delaunay flips across a curved sheet mostly take volume out, so without the shift they
+//! are the largest single source of volume loss in a long run (in the collision backend's
+//! Enright test, 1.4 % of the sphere against the flow's own 0.3 %).
 
 use glam::DVec3;
 
@@ -19,8 +28,9 @@ use crate::ids::{Label, TriId, VertexId};
 use crate::mesh::LabeledMesh;
 
 use super::attributes::VertexAttributes;
+use super::edit::VertexMove;
 use super::edit::{Edit, EditError, VertexRef, apply_edit};
-use super::features;
+use super::features::{self, FeatureParams};
 use super::guard::EditGuard;
 
 /// What makes a flip worthwhile.
@@ -43,15 +53,24 @@ pub struct FlipParams {
     pub min_improvement: f64,
     /// Largest allowed change of any label's volume (Ω). `improve` sets `0.1·ℓ³`.
     pub max_volume_change: f64,
+    /// Cancel the flip's volume change by shifting the new edge's ends along the normal
+    /// where neither is on a feature curve (see the module doc). Default false (see
+    /// [`super::ImproveParams::conserve_volume`]).
+    pub conserve_volume: bool,
+    /// Classification of the new edge's ends for `conserve_volume`.
+    pub features: FeatureParams,
 }
 
 impl Default for FlipParams {
-    /// Delaunay with 0.01 rad (≈ 0.6°) minimum improvement and no volume limit.
+    /// Delaunay with 0.01 rad (≈ 0.6°) minimum improvement, no volume limit, no volume
+    /// conservation.
     fn default() -> Self {
         Self {
             criterion: FlipCriterion::Delaunay,
             min_improvement: 0.01,
             max_volume_change: f64::INFINITY,
+            conserve_volume: false,
+            features: FeatureParams::default(),
         }
     }
 }
@@ -217,10 +236,19 @@ pub(crate) fn flip_edge_in(
         let [pa, pb, py] = [q.a, q.b, q.y].map(|v| mesh.position(v));
         [pb, pa, py]
     }];
-    for (verts, _) in &edit.add_tris {
-        let new = verts.map(|v| edit.start_position(mesh, v));
-        if !old.iter().all(|o| features::normals_agree(o, &new)) {
-            return Err(FlipRefusal::Fold.into());
+    let folds = |edit: &Edit| {
+        edit.add_tris.iter().any(|(verts, _)| {
+            let new = verts.map(|v| edit.end_position(mesh, v));
+            !old.iter().all(|o| features::normals_agree(o, &new))
+        })
+    };
+    if folds(edit) {
+        return Err(FlipRefusal::Fold.into());
+    }
+    if params.conserve_volume {
+        conserve_flip_volume(mesh, edit, &q, &old, params, volumes);
+        if folds(edit) {
+            edit.moves.clear();
         }
     }
     let dv = features::max_label_volume_change(mesh, edit, volumes);
@@ -229,6 +257,52 @@ pub(crate) fn flip_edge_in(
     }
     apply_edit(mesh, attrs, guard, edit)?;
     Ok(dv)
+}
+
+/// Shifts the new edge's ends `x`, `y` of a flip edit along the quad's normal so that no
+/// label volume changes (see the module doc); leaves the edit without moves when either
+/// end is on a feature curve (ridge and corner vertices of a resolved-too-coarsely sheet
+/// move too: their shift is a few thousandths of an edge, and leaving them out left most of
+/// the Enright loss in place), the shift is not possible, or a kept triangle at `x` or `y`
+/// would turn over.
+fn conserve_flip_volume(
+    mesh: &LabeledMesh,
+    edit: &mut Edit,
+    q: &Quad,
+    old: &[[DVec3; 3]; 2],
+    params: &FlipParams,
+    volumes: &mut Vec<(Label, f64)>,
+) {
+    let movable = |v| !features::classify_vertex(mesh, v, &params.features).on_curve();
+    if !(movable(q.x) && movable(q.y)) {
+        return;
+    }
+    let normal = crate::geometry::area_normal(&old[0]) + crate::geometry::area_normal(&old[1]);
+    for v in [q.x, q.y] {
+        edit.moves.push(VertexMove {
+            vertex: v,
+            end: mesh.position(v),
+            blend: None,
+        });
+    }
+    // The tetrahedron is at most a fraction of the quad's area times its height, so the
+    // shift is a fraction of the new edge; a tenth of it bounds what a smooth patch needs.
+    let reach = 0.1 * mesh.position(q.x).distance(mesh.position(q.y));
+    let turned = |edit: &Edit| {
+        [q.x, q.y].iter().any(|&v| {
+            mesh.vertex_triangles(v)
+                .filter(|t| !q.tris.contains(t))
+                .any(|t| {
+                    let tri = mesh.tri(t);
+                    let new = tri.map(|w| edit.end_position(mesh, VertexRef::Old(w)));
+                    !features::normals_agree(&mesh.tri_positions(t), &new)
+                })
+        })
+    };
+    if features::conserve_volume_along(mesh, edit, normal, reach, volumes).is_none() || turned(edit)
+    {
+        edit.moves.clear();
+    }
 }
 
 #[cfg(test)]

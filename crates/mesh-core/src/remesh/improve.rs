@@ -97,6 +97,15 @@ pub struct ImproveParams {
     /// Smallest allowed cosine between a triangle's normal before and after a collapse or
     /// smoothing move. Default 0.5 (60°).
     pub min_normal_cos: f64,
+    /// Cancel the volume change of smoothing moves, smooth midpoint collapses and flips by a
+    /// shift along the normal (see [`SmoothParams::conserve_volume`],
+    /// [`CollapseParams::conserve_volume`], [`FlipParams::conserve_volume`]). Default
+    /// false: it changes which edits pass, and with them the path of a run. Measured on the
+    /// collision backend: one Enright period 0.14 % volume change with it, 1.56 % without;
+    /// but on `double-bubble` 4 merges / 5 splits instead of 1 / 3, and on the grid
+    /// backend's 100-bubble `foam-tension` test one small bubble drifts 1.4 % instead of
+    /// under 0.1 %. Until those are understood it is an opt-in for volume-sensitive runs.
+    pub conserve_volume: bool,
     /// Vertex classification thresholds. Default [`FeatureParams::default`].
     pub features: FeatureParams,
     /// Vertex separation options. Default [`SeparationParams::default`].
@@ -130,6 +139,7 @@ impl Default for ImproveParams {
             flip_criterion: FlipCriterion::Delaunay,
             flip_min_improvement: 0.01,
             min_normal_cos: 0.5,
+            conserve_volume: false,
             features: FeatureParams::default(),
             separation: SeparationParams::default(),
             seed_min_angle_deg: 20.0,
@@ -819,6 +829,7 @@ impl<'p> Run<'p> {
             max_volume_change: self.report.max_volume_change,
             max_edge_length: self.params.collapse_max_edge_factor * self.report.target_edge_length,
             min_normal_cos: self.params.min_normal_cos,
+            conserve_volume: self.params.conserve_volume,
             ..CollapseParams::default()
         };
         let counts = &mut self.report.collapse;
@@ -859,6 +870,8 @@ impl<'p> Run<'p> {
             criterion: self.params.flip_criterion,
             min_improvement: self.params.flip_min_improvement,
             max_volume_change: self.report.max_volume_change,
+            conserve_volume: self.params.conserve_volume,
+            features: self.params.features,
         };
         let snapshot: &LabeledMesh = mesh;
         let mut candidates: Vec<(f64, VertexId, VertexId)> = self
@@ -915,6 +928,7 @@ impl<'p> Run<'p> {
             features: self.params.features,
             max_volume_change: self.report.max_volume_change,
             min_normal_cos: self.params.min_normal_cos,
+            conserve_volume: self.params.conserve_volume,
             ..SmoothParams::default()
         };
         let first = !self.smoothed;
@@ -982,6 +996,51 @@ mod tests {
         assert!(r.edges_in_range > 0.8, "{r:?}");
         let regions = m.regions();
         assert!(regions.shells.iter().all(|s| s.closed && s.consistent));
+    }
+
+    /// A sphere whose vertices are jittered along it (so collapses, flips and smoothing all
+    /// have work) keeps its volume to rounding through a whole `improve` with midpoint
+    /// splits (butterfly splits move towards the smooth surface on purpose), and loses
+    /// volume visibly without `conserve_volume`: every flip across the curved surface, every
+    /// midpoint collapse and every tangential smoothing move cuts a sliver off it.
+    #[test]
+    fn improvement_conserves_volume_where_the_surface_is_smooth() {
+        use crate::ids::Label;
+        use glam::DVec3;
+        let mut m =
+            crate::generators::icosphere(3, DVec3::ZERO, 1.0, [Label::new(0), Label::new(1)])
+                .expect("sphere");
+        let mut state = 11u64;
+        for v in m.vertices().collect::<Vec<_>>() {
+            let mut next = || {
+                state = state
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                ((state >> 33) % 1000) as f64 / 500.0 - 1.0
+            };
+            let jitter = 0.04 * DVec3::new(next(), next(), next());
+            m.set_position(v, (m.position(v) + jitter).normalize());
+        }
+        let volume = |m: &LabeledMesh| crate::geometry::label_volumes(m)[&Label::new(1)];
+        let v0 = volume(&m);
+        let drift = |conserve_volume: bool| {
+            let mut m = m.clone();
+            let params = ImproveParams {
+                target_edge_length: Some(1.2 * mean_edge_length(&m)),
+                butterfly: false,
+                conserve_volume,
+                ..ImproveParams::default()
+            };
+            let r = improve(&mut m, &params, &mut VertexAttributes::none(), &mut NoGuard);
+            assert!(
+                r.collapse.done > 0 && r.flip.done > 0 && r.smooth.done > 0,
+                "{r:?}"
+            );
+            (volume(&m) - v0) / v0
+        };
+        let (kept, lost) = (drift(true), drift(false));
+        assert!(kept.abs() < 1e-12, "relative volume change {kept:e}");
+        assert!(lost < -1e-4, "without conservation: {lost:e}");
     }
 
     /// A jittered sphere refined below its edge length needs several sweeps; only the

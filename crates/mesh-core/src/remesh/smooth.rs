@@ -46,6 +46,15 @@ pub struct SmoothParams {
     /// Moves shorter than this fraction of the vertex's local scale (√ of its mean incident
     /// triangle area) are skipped as converged. Default 1e-3.
     pub min_relative_move: f64,
+    /// On a smooth patch between two materials, shift each move along the vertex normal
+    /// by what cancels its volume change (exactly: a label volume is affine in one
+    /// vertex's position). A tangential move over a curved patch still cuts a sliver of
+    /// volume, of one sign on a convex patch, so without this smoothing shrinks every
+    /// blob a little on each pass. The shift is computed when the move is committed,
+    /// against its neighbours' positions then (moves of one batch share no triangle, so
+    /// their changes add up exactly). Ridges and curves are left as they are: a normal
+    /// shift would round them. Default false (see [`super::ImproveParams::conserve_volume`]).
+    pub conserve_volume: bool,
 }
 
 impl Default for SmoothParams {
@@ -56,6 +65,7 @@ impl Default for SmoothParams {
             max_volume_change: f64::INFINITY,
             min_normal_cos: 0.5,
             min_relative_move: 1e-3,
+            conserve_volume: false,
         }
     }
 }
@@ -71,6 +81,15 @@ pub struct SmoothOutcome {
     pub vetoed: usize,
     /// Sum over committed moves of the largest label volume change of each.
     pub volume_change: f64,
+}
+
+/// One proposed smoothing move: the vertex, its displacement, and the normal to conserve
+/// the volume along (`None` off smooth patches or with `conserve_volume` off).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Proposal {
+    pub vertex: VertexId,
+    pub displacement: DVec3,
+    pub normal: Option<DVec3>,
 }
 
 /// The unprojected area-weighted Laplacian of `v`: `Σ areaᵢ (centroidᵢ − v) / Σ areaᵢ`,
@@ -129,10 +148,10 @@ pub(crate) fn commit_moves(
     attrs: &mut VertexAttributes,
     guard: &mut dyn EditGuard,
     params: &SmoothParams,
-    proposals: &[(VertexId, DVec3)],
+    proposals: &[Proposal],
 ) -> SmoothOutcome {
     let mut out = SmoothOutcome::default();
-    let mut alone: Vec<(VertexId, DVec3)> = Vec::new();
+    let mut alone: Vec<Proposal> = Vec::new();
     let mut edit = Edit::default();
     // Batches: the moves grouped by level, each level cut into runs of MAX_BATCH, in
     // proposal order. A move's level is one more than the highest level among the earlier
@@ -144,7 +163,7 @@ pub(crate) fn commit_moves(
     // quadratic in the number of moves).
     let mut at_triangle: Vec<u32> = vec![0; mesh.triangle_capacity()];
     let mut levels: Vec<u32> = Vec::with_capacity(proposals.len());
-    for &(v, _) in proposals {
+    for &Proposal { vertex: v, .. } in proposals {
         if !mesh.is_vertex_alive(v) {
             levels.push(u32::MAX);
             continue;
@@ -168,7 +187,7 @@ pub(crate) fn commit_moves(
     let batches = order
         .chunk_by(|&a, &b| levels[a as usize] == levels[b as usize])
         .flat_map(|level| level.chunks(MAX_BATCH));
-    let mut batch: Vec<(VertexId, DVec3)> = Vec::with_capacity(MAX_BATCH);
+    let mut batch: Vec<Proposal> = Vec::with_capacity(MAX_BATCH);
     for members in batches {
         batch.clear();
         batch.extend(members.iter().map(|&i| proposals[i as usize]));
@@ -179,18 +198,18 @@ pub(crate) fn commit_moves(
             .with_min_len(64)
             .map_init(
                 || (Edit::default(), Vec::new()),
-                |(scratch, volumes), &(v, d)| {
-                    local_move_check(snapshot, v, d, params, scratch, volumes)
-                },
+                |(scratch, volumes), p| local_move_check(snapshot, p, params, scratch, volumes),
             )
             .collect();
         edit.clear();
-        let mut changes = Vec::with_capacity(checked.len());
-        for c in checked {
+        // Per committed move: its volume change and the proposal it came from (a blamed
+        // move is retried from its proposal, its volume shift recomputed then).
+        let mut changes: Vec<(f64, Proposal)> = Vec::with_capacity(checked.len());
+        for (c, p) in checked.into_iter().zip(&batch) {
             match c {
                 Some((m, dv)) => {
                     edit.moves.push(m);
-                    changes.push(dv);
+                    changes.push((dv, *p));
                 }
                 None => out.refused += 1,
             }
@@ -219,7 +238,7 @@ pub(crate) fn commit_moves(
                     for i in 0..edit.moves.len() {
                         let m = edit.moves[i];
                         if blamed.binary_search(&i).is_ok() {
-                            alone.push((m.vertex, m.end - mesh.position(m.vertex)));
+                            alone.push(changes[i].1);
                         } else {
                             edit.moves[keep] = m;
                             changes[keep] = changes[i];
@@ -234,21 +253,17 @@ pub(crate) fn commit_moves(
         if cleared {
             if commit_guarded(mesh, attrs, guard, &edit).is_ok() {
                 out.moved += edit.moves.len();
-                out.volume_change += changes.iter().sum::<f64>();
+                out.volume_change += changes.iter().map(|c| c.0).sum::<f64>();
             } else {
                 out.refused += edit.moves.len();
             }
         } else {
-            alone.extend(
-                edit.moves
-                    .iter()
-                    .map(|m| (m.vertex, m.end - mesh.position(m.vertex))),
-            );
+            alone.extend(changes.iter().map(|c| c.1));
         }
     }
     let mut volumes = Vec::new();
-    for &(v, d) in &alone {
-        match smooth_vertex_in(&mut edit, &mut volumes, mesh, attrs, guard, v, d, params) {
+    for p in &alone {
+        match smooth_vertex_in(&mut edit, &mut volumes, mesh, attrs, guard, p, params) {
             Ok(dv) => {
                 out.moved += 1;
                 out.volume_change += dv;
@@ -272,7 +287,7 @@ pub(crate) fn propose_moves(
     params: &SmoothParams,
     feature_edges: Option<&[u32]>,
     only: Option<&[VertexId]>,
-) -> Vec<(VertexId, DVec3)> {
+) -> Vec<Proposal> {
     let propose = |v: VertexId| {
         if !mesh.is_vertex_alive(v) {
             return None;
@@ -286,7 +301,15 @@ pub(crate) fn propose_moves(
         }
         let (kind, d, scale) = vertex_frame(mesh, v, &params.features)?;
         let d = kind.project(d) * params.step;
-        (d.length() > params.min_relative_move * scale && d.is_finite()).then_some((v, d))
+        let normal = match (params.conserve_volume, kind) {
+            (true, VertexKind::Smooth { normal }) => Some(normal),
+            _ => None,
+        };
+        (d.length() > params.min_relative_move * scale && d.is_finite()).then_some(Proposal {
+            vertex: v,
+            displacement: d,
+            normal,
+        })
     };
     match only {
         Some(vertices) => vertices
@@ -336,18 +359,31 @@ enum SmoothError {
     Edit(#[from] EditError),
 }
 
-/// The local checks of moving `v` by `d`: no incident triangle inverts or rotates too far
-/// and no label volume changes by more than Ω. Returns the move and the largest label
+/// The local checks of a proposed move, after shifting it along its normal (when it has
+/// one) by what keeps every label's volume: no incident triangle inverts or rotates too
+/// far and no label volume changes by more than Ω. Returns the move and the largest label
 /// volume change it causes.
 fn local_move_check(
     mesh: &LabeledMesh,
-    v: VertexId,
-    d: DVec3,
+    p: &Proposal,
     params: &SmoothParams,
     scratch: &mut Edit,
     volumes: &mut Vec<(Label, f64)>,
 ) -> Option<(VertexMove, f64)> {
-    let end = mesh.position(v) + d;
+    let v = p.vertex;
+    scratch.clear();
+    scratch.moves.push(VertexMove {
+        vertex: v,
+        end: mesh.position(v) + p.displacement,
+        blend: None,
+    });
+    if let Some(normal) = p.normal {
+        // The sliver a tangential move cuts is second order in the move, so a shift as
+        // long as the move itself is already generous.
+        let reach = p.displacement.length();
+        features::conserve_volume_along(mesh, scratch, normal, reach, volumes);
+    }
+    let end = scratch.moves[0].end;
     for t in mesh.vertex_triangles(v) {
         let old = mesh.tri_positions(t);
         let new = mesh
@@ -359,35 +395,25 @@ fn local_move_check(
             return None;
         }
     }
-    let m = VertexMove {
-        vertex: v,
-        end,
-        blend: None,
-    };
-    scratch.clear();
-    scratch.moves.push(m);
     let dv = features::max_label_volume_change(mesh, scratch, volumes);
-    (dv <= params.max_volume_change).then_some((m, dv))
+    (dv <= params.max_volume_change).then_some((scratch.moves[0], dv))
 }
 
-/// Moves `v` by `d`, alone, if it passes [`local_move_check`] and the guard; returns the
-/// largest label volume change.
-#[allow(clippy::too_many_arguments)]
+/// Makes one proposed move alone, if it passes [`local_move_check`] and the guard; returns
+/// the largest label volume change.
 fn smooth_vertex_in(
     edit: &mut Edit,
     volumes: &mut Vec<(Label, f64)>,
     mesh: &mut LabeledMesh,
     attrs: &mut VertexAttributes,
     guard: &mut dyn EditGuard,
-    v: VertexId,
-    d: DVec3,
+    p: &Proposal,
     params: &SmoothParams,
 ) -> Result<f64, SmoothError> {
-    if !mesh.is_vertex_alive(v) {
+    if !mesh.is_vertex_alive(p.vertex) {
         return Err(SmoothError::Refused);
     }
-    let (m, dv) =
-        local_move_check(mesh, v, d, params, edit, volumes).ok_or(SmoothError::Refused)?;
+    let (m, dv) = local_move_check(mesh, p, params, edit, volumes).ok_or(SmoothError::Refused)?;
     edit.clear();
     edit.moves.push(m);
     apply_edit(mesh, attrs, guard, edit)?;
