@@ -6,10 +6,9 @@
 //! both `a` and `b` to that position.
 //!
 //! **Where the merged vertex goes** depends on the endpoints' [`VertexKind`]s: two smooth
-//! vertices meet at the midpoint, shifted along their normal by what keeps every label's
-//! volume (`conserve_volume`; the midpoint alone sits on the chord and shaves a sliver
-//! off every convex patch, which over a long run is most of the volume remeshing loses);
-//! a feature vertex (ridge, corner, curve) keeps its place
+//! vertices meet at the midpoint (with `conserve_volume`, shifted along their normal by
+//! what keeps every label's volume: the midpoint sits on a chord and shaves a sliver off
+//! a convex patch); a feature vertex (ridge, corner, curve) keeps its place
 //! against a smooth one; two ridge vertices merge at the midpoint only along their ridge;
 //! two vertices of a feature curve merge only along a curve edge, onto one endpoint, so
 //! the curve keeps its vertices exactly. Everything else is refused.

@@ -260,11 +260,12 @@ pub(crate) fn flip_edge_in(
 }
 
 /// Shifts the new edge's ends `x`, `y` of a flip edit along the quad's normal so that no
-/// label volume changes (see the module doc); leaves the edit without moves when either
-/// end is on a feature curve (ridge and corner vertices of a resolved-too-coarsely sheet
-/// move too: their shift is a few thousandths of an edge, and leaving them out left most of
-/// the Enright loss in place), the shift is not possible, or a kept triangle at `x` or `y`
-/// would turn over.
+/// label volume changes (see the module doc). Leaves the edit without moves when either
+/// end is on a feature curve, when no shift within a tenth of the new edge cancels the
+/// change, or when a kept triangle at `x` or `y` would turn over. Ridge and corner
+/// vertices do move: on a coarsely resolved sheet most vertices classify as such, their
+/// shift is a few thousandths of an edge, and leaving them out kept most of the Enright
+/// loss.
 fn conserve_flip_volume(
     mesh: &LabeledMesh,
     edit: &mut Edit,
