@@ -424,9 +424,10 @@ pub(crate) fn max_label_volume_change(
 /// of its corners), so two evaluations give the slope along `dir` and the root is the
 /// shift. An edit between exactly two labels has one volume to keep (the other changes by
 /// its negative); an edit touching more labels is left alone, as is one whose volume does
-/// not depend on the shift (slope below rounding). Used by smoothing and by midpoint
-/// collapses on smooth patches, so that remeshing stops feeding volume drift (El Topo
-/// bounds each edit's change by Ω; this removes it to rounding where the surface allows).
+/// not depend on the shift (slope below rounding). Used by smoothing, by midpoint
+/// collapses on smooth patches and by flips (the new edge's ends), so that remeshing stops
+/// feeding volume drift (El Topo bounds each edit's change by Ω; this removes it to
+/// rounding where the surface allows).
 pub(crate) fn conserve_volume_along(
     mesh: &LabeledMesh,
     edit: &mut Edit,
@@ -604,10 +605,8 @@ mod tests {
         let params = FeatureParams::default();
         let mut rng_state = 12345u64;
         let mut next = || {
-            rng_state = rng_state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((rng_state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+            let x = crate::remesh::fixtures::lcg(&mut rng_state);
+            ((x >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
         };
         for spread in [0.05, 0.15, 0.3, 0.6] {
             for _ in 0..200 {

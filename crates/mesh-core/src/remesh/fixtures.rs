@@ -4,6 +4,18 @@
 
 use glam::DVec3;
 
+/// One step of Knuth's 64-bit linear congruential generator, the deterministic noise of
+/// the remesh unit tests (jittered spheres, random quadrics, random edit sequences); each
+/// test derives its own sample from the returned state. `tests/remesh_topology.rs`, which
+/// includes this file, has no use for it.
+#[allow(dead_code)]
+pub(crate) fn lcg(state: &mut u64) -> u64 {
+    *state = state
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
+    *state
+}
+
 /// Raw arrays (positions, triangles, `[front, back]` labels) of the bowtie: two
 /// tetrahedra of label 1 in label 0 touching only at vertex 0, the second the first
 /// mirrored through it. Mirroring reverses orientation, so the mirrored triangles are

@@ -789,12 +789,8 @@ mod tests {
             ..FlipParams::default()
         };
         let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut next = |n: usize| {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 33) as usize % n.max(1)
-        };
+        let mut next =
+            |n: usize| (crate::remesh::fixtures::lcg(&mut state) >> 33) as usize % n.max(1);
         let (mut flips, mut splits, mut vetoed) = (0, 0, 0);
         for k in 0..240 {
             let tris: Vec<TriId> = mesh.triangles().collect();

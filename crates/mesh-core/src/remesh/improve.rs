@@ -975,6 +975,7 @@ impl<'p> Run<'p> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::remesh::fixtures::lcg;
     use crate::remesh::guard::NoGuard;
 
     #[test]
@@ -1012,12 +1013,7 @@ mod tests {
                 .expect("sphere");
         let mut state = 11u64;
         for v in m.vertices().collect::<Vec<_>>() {
-            let mut next = || {
-                state = state
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                ((state >> 33) % 1000) as f64 / 500.0 - 1.0
-            };
+            let mut next = || ((lcg(&mut state) >> 33) % 1000) as f64 / 500.0 - 1.0;
             let jitter = 0.04 * DVec3::new(next(), next(), next());
             m.set_position(v, (m.position(v) + jitter).normalize());
         }
@@ -1061,10 +1057,7 @@ mod tests {
         .expect("sphere");
         let mut state = 7u64;
         for v in m.vertices().collect::<Vec<_>>() {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            let r = 1.0 + 0.02 * (((state >> 33) % 1000) as f64 / 500.0 - 1.0);
+            let r = 1.0 + 0.02 * (((lcg(&mut state) >> 33) % 1000) as f64 / 500.0 - 1.0);
             m.set_position(v, m.position(v).normalize() * r);
         }
         let params = ImproveParams {
