@@ -18,10 +18,7 @@ use std::collections::HashSet;
 
 use glam::{DVec3, IVec3};
 use mesh_core::broadphase::{Aabb, Bvh};
-use mesh_core::predicates::{
-    intersect_sharing_edge, intersect_sharing_vertex, intersect_triangle_triangle,
-};
-use mesh_core::validate::{CornerTableError, ValidationReport};
+use mesh_core::validate::{CornerTableError, ValidationReport, triangles_intersect};
 use mesh_core::{LabeledMesh, TriId};
 use rayon::prelude::*;
 
@@ -112,39 +109,6 @@ pub(crate) fn inconsistency_cells(
     cells
 }
 
-/// Exact test of two live triangles, excluding contact along what they share.
-pub(crate) fn pair_intersects(mesh: &LabeledMesh, a: TriId, b: TriId) -> bool {
-    let (ta, tb) = (mesh.tri(a), mesh.tri(b));
-    let (pa, pb) = (mesh.tri_positions(a), mesh.tri_positions(b));
-    let mut shared = [(0usize, 0usize); 3];
-    let mut n = 0;
-    for (i, v) in ta.iter().enumerate() {
-        for (j, w) in tb.iter().enumerate() {
-            if v == w && n < 3 {
-                shared[n] = (i, j);
-                n += 1;
-            }
-        }
-    }
-    match n {
-        0 => intersect_triangle_triangle(&pa, &pb),
-        1 => {
-            let (i, j) = shared[0];
-            intersect_sharing_vertex(
-                pa[i],
-                [pa[(i + 1) % 3], pa[(i + 2) % 3]],
-                [pb[(j + 1) % 3], pb[(j + 2) % 3]],
-            )
-        }
-        2 => {
-            let ((i0, j0), (i1, j1)) = (shared[0], shared[1]);
-            intersect_sharing_edge(pa[i0], pa[i1], pa[3 - i0 - i1], pb[3 - j0 - j1])
-        }
-        // The same vertex set: a duplicate, which validation reports.
-        _ => false,
-    }
-}
-
 /// Whether a live triangle can be tested: three distinct vertices, finite coordinates.
 fn testable(mesh: &LabeledMesh, t: TriId) -> bool {
     let [a, b, c] = mesh.tri(t);
@@ -175,7 +139,7 @@ pub(crate) fn intersecting_pairs(mesh: &LabeledMesh, changed: Option<&[TriId]>) 
             Vec::new,
             |acc, a, b| {
                 let (a, b) = (TriId::new(a.min(b)), TriId::new(a.max(b)));
-                if pair_intersects(mesh, a, b) {
+                if triangles_intersect(mesh, a, b) {
                     acc.push([a, b]);
                 }
             },
@@ -202,7 +166,7 @@ pub(crate) fn intersecting_pairs(mesh: &LabeledMesh, changed: Option<&[TriId]>) 
                         if o == t || (is_changed[o.idx()] && o < t) {
                             return;
                         }
-                        if pair_intersects(mesh, t, o) {
+                        if triangles_intersect(mesh, t, o) {
                             acc.push([t.min(o), t.max(o)]);
                         }
                     });

@@ -33,7 +33,9 @@
 //! - [`cross_axis_line_triangle`], [`cross_axis_segment_triangle`],
 //!   [`compare_crossing_with_point`] for material-vector ray casting;
 //! - [`intersect_triangle_triangle`], [`intersect_segment_triangle`], and for mesh
-//!   validation [`intersect_sharing_vertex`] and [`intersect_sharing_edge`].
+//!   validation [`intersect_sharing_vertex`] and [`intersect_sharing_edge`], both behind
+//!   [`intersect_keyed_triangle_triangle`] (two triangles of one mesh, shared vertices
+//!   recognised by key).
 
 pub mod crossing;
 pub mod orient;
@@ -49,6 +51,6 @@ pub use crossing::{
 };
 pub use orient::{Axis, Sign, collinear, orient2d, orient2d_axis, orient3d};
 pub use tri_tri::{
-    intersect_segment_triangle, intersect_sharing_edge, intersect_sharing_vertex,
-    intersect_triangle_triangle,
+    intersect_keyed_triangle_triangle, intersect_segment_triangle, intersect_sharing_edge,
+    intersect_sharing_vertex, intersect_triangle_triangle,
 };

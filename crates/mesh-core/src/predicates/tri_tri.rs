@@ -321,6 +321,57 @@ pub fn intersect_sharing_edge(v: DVec3, w: DVec3, a: DVec3, b: DVec3) -> bool {
     orient2d_axis(axis, v, w, b) == sa
 }
 
+/// Triangles `a` and `b` of one mesh, their vertices named by `keys` (equal keys: the same
+/// vertex), meet somewhere other than at what they share: anywhere for no shared vertex
+/// ([`intersect_triangle_triangle`]), away from `v` for one shared vertex `v`
+/// ([`intersect_sharing_vertex`]), beyond the edge for a shared edge
+/// ([`intersect_sharing_edge`]); two triangles on the same three vertices are a duplicate,
+/// which validation reports on its own, and give `false`.
+///
+/// The one narrow phase of validation, the edit guards and the grid's safety net. Why it
+/// filters before the shared-vertex test: on a surface, most pairs that share a vertex
+/// are neighbours around it whose far edge lies certainly and strictly on one side of the
+/// other's plane, which proves they meet only at `v` for the price of one float normal.
+/// A triangle with a repeated key whose sharing cannot be told apart (two of its slots
+/// matching one slot of the other) is reported as meeting: the conservative answer for a
+/// shape no test here is defined on.
+pub fn intersect_keyed_triangle_triangle(
+    (ka, pa): ([u32; 3], &[DVec3; 3]),
+    (kb, pb): ([u32; 3], &[DVec3; 3]),
+) -> bool {
+    // The pairs of slots with equal keys, by plain comparisons: this runs for millions of
+    // pairs, most of them neighbours.
+    let mut shared = [(0usize, 0usize); 2];
+    let mut n = 0;
+    for (i, x) in ka.iter().enumerate() {
+        for (j, y) in kb.iter().enumerate() {
+            if x == y {
+                if n < 2 {
+                    shared[n] = (i, j);
+                }
+                n += 1;
+            }
+        }
+    }
+    match n {
+        0 => intersect_triangle_triangle(pa, pb),
+        1 => {
+            let (i, j) = shared[0];
+            let (v, a) = (pa[i], [pa[(i + 1) % 3], pa[(i + 2) % 3]]);
+            let b = [pb[(j + 1) % 3], pb[(j + 2) % 3]];
+            !certainly_separated(&[v, a[0], a[1]], &b) && intersect_sharing_vertex(v, a, b)
+        }
+        2 => {
+            let ((i0, j0), (i1, j1)) = (shared[0], shared[1]);
+            if i0 == i1 || j0 == j1 {
+                return true;
+            }
+            intersect_sharing_edge(pa[i0], pa[i1], pa[3 - i0 - i1], pb[3 - j0 - j1])
+        }
+        _ => false,
+    }
+}
+
 /// For `a` and `b` on the line of `vw`: both lie strictly beyond `w`, or both strictly
 /// beyond `v`. Compared along a coordinate that varies on the line: plain comparisons.
 fn beyond_same_end(v: DVec3, w: DVec3, a: DVec3, b: DVec3) -> bool {

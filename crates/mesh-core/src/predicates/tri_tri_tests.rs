@@ -234,6 +234,35 @@ proptest! {
         }
     }
 
+    /// The keyed test against the reference for every way two triangles of a mesh can
+    /// share: nothing, a vertex or an edge, in any slots of either triangle, with the
+    /// unshared corners anywhere (also on the shared ones: equal points under different
+    /// keys are not shared, so they touch).
+    #[test]
+    fn keyed_matches_reference(
+        a in small_tri(2),
+        b in small_tri(2),
+        shared in 0usize..=2,
+        (ra, rb) in (0usize..3, 0usize..3),
+    ) {
+        prop_assume!(!degenerate(&a));
+        let pb: [DVec3; 3] = std::array::from_fn(|k| if k < shared { a[k] } else { b[k] });
+        prop_assume!(!degenerate(&pb));
+        let kb: [u32; 3] = std::array::from_fn(|k| if k < shared { k as u32 } else { 10 + k as u32 });
+        let rotate = |r: usize, x: [DVec3; 3]| std::array::from_fn(|k| x[(k + r) % 3]);
+        let rotate_keys = |r: usize, x: [u32; 3]| std::array::from_fn(|k| x[(k + r) % 3]);
+        let (pa, ka) = (rotate(ra, a), rotate_keys(ra, [0, 1, 2]));
+        let (pb, kb) = (rotate(rb, pb), rotate_keys(rb, kb));
+        let meets = hull_intersection_vertices(&pa, &pb);
+        let expected = match shared {
+            0 => !meets.is_empty(),
+            1 => meets.iter().any(|x| *x != q3(a[0])),
+            _ => meets.iter().any(|x| !on_segment(x, a[0], a[1])),
+        };
+        prop_assert_eq!(intersect_keyed_triangle_triangle((ka, &pa), (kb, &pb)), expected);
+        prop_assert_eq!(intersect_keyed_triangle_triangle((kb, &pb), (ka, &pa)), expected);
+    }
+
     #[test]
     fn sharing_edge_matches_reference(e in small_tri(2), b in (-2i32..=2, -2i32..=2, -2i32..=2)) {
         let (s, t, a, b) = (e[0], e[1], e[2], v(b.0, b.1, b.2));

@@ -671,35 +671,9 @@ impl EditGuard for StaticIntersectionGuard {
 
 /// Exact intersection of two keyed triangles, excluding contact at shared vertices and
 /// edges.
+#[inline]
 fn intersect_keyed(a: &Keyed, b: &Keyed) -> bool {
-    let mut shared = [(0usize, 0usize); 3];
-    let mut n = 0;
-    for (i, ka) in a.keys.iter().enumerate() {
-        for (j, kb) in b.keys.iter().enumerate() {
-            if ka == kb {
-                shared[n.min(2)] = (i, j);
-                n += 1;
-            }
-        }
-    }
-    let (pa, pb) = (&a.points, &b.points);
-    match n {
-        0 => predicates::intersect_triangle_triangle(pa, pb),
-        1 => {
-            let (i, j) = shared[0];
-            predicates::intersect_sharing_vertex(
-                pa[i],
-                [pa[(i + 1) % 3], pa[(i + 2) % 3]],
-                [pb[(j + 1) % 3], pb[(j + 2) % 3]],
-            )
-        }
-        2 => {
-            let ((i0, j0), (i1, j1)) = (shared[0], shared[1]);
-            predicates::intersect_sharing_edge(pa[i0], pa[i1], pa[3 - i0 - i1], pb[3 - j0 - j1])
-        }
-        // Same vertex set: a duplicate, which validation reports separately.
-        _ => false,
-    }
+    predicates::intersect_keyed_triangle_triangle((a.keys, &a.points), (b.keys, &b.points))
 }
 
 #[cfg(test)]

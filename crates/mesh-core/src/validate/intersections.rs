@@ -2,11 +2,12 @@
 //! they share combinatorially.
 //!
 //! Broad phase: a [`Bvh`] over the boxes of the checkable triangles, whose parallel
-//! self-pair traversal yields each overlapping pair once. Narrow phase, exact, chosen by
-//! how many vertex ids the two triangles share:
-//! - none: [`intersect_triangle_triangle`] (closed: touching counts);
-//! - one vertex `v`: [`intersect_sharing_vertex`] — meeting anywhere but at `v`;
-//! - one edge `vw`: [`intersect_sharing_edge`] — overlapping beyond `vw` (a fold);
+//! self-pair traversal yields each overlapping pair once. Narrow phase, exact
+//! ([`intersect_keyed_triangle_triangle`]), chosen by how many vertex ids the two
+//! triangles share:
+//! - none: [`intersect_triangle_triangle`](crate::predicates::intersect_triangle_triangle) (closed: touching counts);
+//! - one vertex `v`: [`intersect_sharing_vertex`](crate::predicates::intersect_sharing_vertex) — meeting anywhere but at `v`;
+//! - one edge `vw`: [`intersect_sharing_edge`](crate::predicates::intersect_sharing_edge) — overlapping beyond `vw` (a fold);
 //! - all three: a duplicate, reported by layer 1, not here.
 //!
 //! The predicates run their own floating-point filters (box test, certain plane
@@ -16,16 +17,12 @@
 //! Triangles with a repeated vertex or a non-finite coordinate are left out (layers 1 and
 //! 3 report them).
 
-use glam::DVec3;
-
 use super::report::Listed;
 use super::topology::{EdgeContext, is_degenerate};
 use crate::broadphase::{Aabb, Bvh};
 use crate::ids::TriId;
 use crate::mesh::LabeledMesh;
-use crate::predicates::{
-    intersect_sharing_edge, intersect_sharing_vertex, intersect_triangle_triangle,
-};
+use crate::predicates::intersect_keyed_triangle_triangle;
 
 /// Intersecting pairs found by one rayon task: the exact count, and the smallest pairs.
 struct Found {
@@ -80,7 +77,7 @@ pub(super) fn check(mesh: &LabeledMesh, ctx: &EdgeContext, cap: usize) -> Listed
         Found::new,
         |acc, a, b| {
             let (a, b) = (TriId::new(a.min(b)), TriId::new(a.max(b)));
-            if pair_intersects(mesh, a, b) {
+            if triangles_intersect(mesh, a, b) {
                 acc.count += 1;
                 acc.smallest.push([a, b]);
                 acc.trim(cap, slack);
@@ -102,53 +99,13 @@ pub(super) fn check(mesh: &LabeledMesh, ctx: &EdgeContext, cap: usize) -> Listed
     }
 }
 
-/// Exact test of one candidate pair (distinct, non-degenerate, finite triangles).
-pub(super) fn pair_intersects(mesh: &LabeledMesh, a: TriId, b: TriId) -> bool {
-    let (ta, tb) = (mesh.tri(a), mesh.tri(b));
-    // Slot in `tb` of each vertex of `ta` (3 = not shared), by plain comparisons: this
-    // runs for millions of pairs, most of them neighbours.
-    let mut in_b = [3usize; 3];
-    let mut shared = 0;
-    for (i, v) in ta.iter().enumerate() {
-        for (j, w) in tb.iter().enumerate() {
-            if v == w {
-                in_b[i] = j;
-                shared += 1;
-            }
-        }
-    }
-    let (pa, pb): ([DVec3; 3], [DVec3; 3]) = (mesh.tri_positions(a), mesh.tri_positions(b));
-    match shared {
-        0 => intersect_triangle_triangle(&pa, &pb),
-        1 => {
-            let i = if in_b[0] < 3 {
-                0
-            } else if in_b[1] < 3 {
-                1
-            } else {
-                2
-            };
-            let j = in_b[i];
-            let (v, a1, a2) = (pa[i], pa[(i + 1) % 3], pa[(i + 2) % 3]);
-            let (b1, b2) = (pb[(j + 1) % 3], pb[(j + 2) % 3]);
-            // The usual case on a surface: b's far edge certainly strictly on one side of
-            // a's plane, so the triangles can only share v.
-            !crate::predicates::tri_tri::certainly_separated(&[v, a1, a2], &[b1, b2])
-                && intersect_sharing_vertex(v, [a1, a2], [b1, b2])
-        }
-        2 => {
-            // The apex of a is its unshared slot; the apex of b is the slot of b that no
-            // vertex of a maps to (slots sum to 0 + 1 + 2 = 3).
-            let i = if in_b[0] == 3 {
-                0
-            } else if in_b[1] == 3 {
-                1
-            } else {
-                2
-            };
-            let j = 3 - in_b[(i + 1) % 3] - in_b[(i + 2) % 3];
-            intersect_sharing_edge(pa[(i + 1) % 3], pa[(i + 2) % 3], pa[i], pb[j])
-        }
-        _ => false,
-    }
+/// Whether triangles `a` and `b` of `mesh` (distinct, non-degenerate, finite) meet
+/// anywhere but along what they share: layer 4's exact pair test, also the grid tracker's
+/// safety net's.
+pub fn triangles_intersect(mesh: &LabeledMesh, a: TriId, b: TriId) -> bool {
+    let key = |t: TriId| mesh.tri(t).map(|v| v.raw());
+    intersect_keyed_triangle_triangle(
+        (key(a), &mesh.tri_positions(a)),
+        (key(b), &mesh.tri_positions(b)),
+    )
 }

@@ -350,7 +350,7 @@ fn broad_phase_misses_no_intersecting_pair() {
                 .iter()
                 .filter(|x| mesh.tri(t(b)).contains(x))
                 .count();
-            if shared < 3 && intersections::pair_intersects(&mesh, t(a), t(b)) {
+            if shared < 3 && intersections::triangles_intersect(&mesh, t(a), t(b)) {
                 want.push([t(a), t(b)]);
             }
         }
