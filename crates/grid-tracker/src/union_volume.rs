@@ -96,7 +96,9 @@ pub fn union_volume(mesh: &LabeledMesh) -> Option<UnionVolume> {
         }
     }
     let outside = Label::OUTSIDE;
-    let total: f64 = (0..nb)
+    // Per row, then summed in row order: a parallel float sum would round differently for
+    // each way rayon splits the rows, so the reference would depend on the thread count.
+    let rows: Vec<f64> = (0..nb)
         .into_par_iter()
         .map_init(Vec::<(f64, i32)>::new, |hits, i| {
             let mut row_len = 0.0;
@@ -135,7 +137,8 @@ pub fn union_volume(mesh: &LabeledMesh) -> Option<UnionVolume> {
             }
             row_len
         })
-        .sum();
+        .collect();
+    let total: f64 = rows.iter().sum();
     Some(UnionVolume {
         volume: total * h * h,
         spacing: h,

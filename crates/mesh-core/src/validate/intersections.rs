@@ -99,6 +99,53 @@ pub(super) fn check(mesh: &LabeledMesh, ctx: &EdgeContext, cap: usize) -> Listed
     }
 }
 
+/// Whether any two triangles of `mesh` meet anywhere but along what they share: layer 4 as
+/// a yes/no question, for a mesh that passes layers 1–3.
+///
+/// Why not [`check`]: a caller that only asks whether a mesh is clean (`fix` deciding
+/// whether its input needs repair) has no use for the count and list of every pair, and
+/// on a mesh that is not clean — the usual input of a repair — the first pair is found
+/// long before the last: once one is found, every task skips its remaining exact tests.
+/// Triangles that layers 1–3 would reject (dead, dangling, degenerate, non-finite) are
+/// left out, so any mesh is safe to ask. The answer does not depend on the thread count.
+pub fn any_intersection(mesh: &LabeledMesh) -> bool {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let tris = mesh.tris();
+    let box_of = |t: u32| {
+        let id = TriId::new(t);
+        let tri = tris[t as usize];
+        let usable = mesh.is_triangle_alive(id)
+            && tri.iter().all(|&v| mesh.is_vertex_alive(v))
+            && !is_degenerate(tri);
+        if !usable {
+            return Aabb::EMPTY;
+        }
+        let p = mesh.tri_positions(id);
+        if p.iter().all(|q| q.is_finite()) {
+            Aabb::from_points(&p)
+        } else {
+            Aabb::EMPTY
+        }
+    };
+    let Ok(bvh) = Bvh::build_from_fn(tris.len(), box_of) else {
+        return false;
+    };
+    let found = AtomicBool::new(false);
+    bvh.self_pairs_fold(
+        0.0,
+        || (),
+        |_, a, b| {
+            if !found.load(Ordering::Relaxed)
+                && triangles_intersect(mesh, TriId::new(a), TriId::new(b))
+            {
+                found.store(true, Ordering::Relaxed);
+            }
+        },
+        |_, _| (),
+    );
+    found.into_inner()
+}
+
 /// Whether triangles `a` and `b` of `mesh` (distinct, non-degenerate, finite) meet
 /// anywhere but along what they share: layer 4's exact pair test, also the grid tracker's
 /// safety net's.

@@ -33,7 +33,7 @@ pub(crate) mod testmesh;
 #[cfg(test)]
 mod tests;
 
-pub use intersections::triangles_intersect;
+pub use intersections::{any_intersection, triangles_intersect};
 pub use report::{
     BoundaryEdge, CornerTableError, DanglingReference, InconsistentEdge, Listed, SameLabel,
     ValidationReport,
