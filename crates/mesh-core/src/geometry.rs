@@ -244,6 +244,7 @@ struct QualityAcc {
     max_angle: f64,
     min_edge: f64,
     max_edge: f64,
+    /// Filled in by [`quality`] after the parallel fold (see there).
     edge_sum: f64,
     min_area: f64,
     max_area: f64,
@@ -278,7 +279,6 @@ impl QualityAcc {
             let len = u.length();
             self.min_edge = self.min_edge.min(len);
             self.max_edge = self.max_edge.max(len);
-            self.edge_sum += len;
         }
         let area = triangle_area(p);
         self.min_area = self.min_area.min(area);
@@ -294,7 +294,7 @@ impl QualityAcc {
             max_angle: self.max_angle.max(o.max_angle),
             min_edge: self.min_edge.min(o.min_edge),
             max_edge: self.max_edge.max(o.max_edge),
-            edge_sum: self.edge_sum + o.edge_sum,
+            edge_sum: 0.0,
             min_area: self.min_area.min(o.min_area),
             max_area: self.max_area.max(o.max_area),
         }
@@ -329,9 +329,13 @@ impl QualityAcc {
 }
 
 /// Quality figures over the live triangles (see [`QualityStats`]).
+///
+/// The extremes and counts are folded in parallel in any order; the edge-length sum
+/// behind the mean goes through [`ordered_sum`], so the figures do not depend on the
+/// thread count.
 pub fn quality(mesh: &LabeledMesh) -> QualityStats {
     let alive = mesh.tri_alive_flags();
-    (0..mesh.triangle_capacity())
+    let mut acc = (0..mesh.triangle_capacity())
         .into_par_iter()
         .with_min_len(1024)
         .filter(|&t| alive[t])
@@ -339,8 +343,19 @@ pub fn quality(mesh: &LabeledMesh) -> QualityStats {
             || QualityAcc::EMPTY,
             |acc, t| acc.add(&mesh.tri_positions(TriId::new(t as u32))),
         )
-        .reduce(|| QualityAcc::EMPTY, QualityAcc::merge)
-        .finish()
+        .reduce(|| QualityAcc::EMPTY, QualityAcc::merge);
+    acc.edge_sum = ordered_sum(mesh.triangle_capacity(), |t| {
+        if !alive[t] {
+            return 0.0;
+        }
+        let p = mesh.tri_positions(TriId::new(t as u32));
+        if p.iter().all(|q| q.is_finite()) {
+            (0..3).map(|k| p[k].distance(p[(k + 1) % 3])).sum()
+        } else {
+            0.0
+        }
+    });
+    acc.finish()
 }
 
 #[cfg(test)]
