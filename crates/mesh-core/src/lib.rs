@@ -29,6 +29,7 @@ pub mod regions;
 pub mod remesh;
 pub mod solve;
 pub mod tracker;
+pub mod triangle_index;
 pub mod validate;
 
 pub use corner::Side;
@@ -41,3 +42,4 @@ pub use tracker::{
     ContactChanges, LabelVolume, MaterialCensus, StageTiming, StepReport, SurfaceTracker,
     TopologyEvents, TrackError, check_proposal,
 };
+pub use triangle_index::TriangleIndex;

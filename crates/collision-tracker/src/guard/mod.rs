@@ -53,7 +53,6 @@
 //! rotation, volume change — the operations check those), and pairs of elements that both
 //! stay still (an intersection-free mesh has none that collide).
 
-mod index;
 mod motion;
 mod sweep;
 #[cfg(test)]
@@ -63,7 +62,6 @@ use mesh_core::LabeledMesh;
 use mesh_core::remesh::{Applied, Edit, EditGuard, StaticIntersectionGuard};
 
 use crate::ccd::CcdOptions;
-use index::TriangleIndex;
 use motion::Motion;
 use sweep::{Hit, Scratch};
 
@@ -105,8 +103,8 @@ pub struct GuardStats {
 #[derive(Debug, Default)]
 pub struct CollisionGuard {
     options: CollisionGuardOptions,
+    /// The end-state test (step 1); its triangle index is also the sweeps' broad phase.
     end_state: StaticIntersectionGuard,
-    index: TriangleIndex,
     motion: Motion,
     scratch: Scratch,
     stats: GuardStats,
@@ -146,11 +144,10 @@ impl CollisionGuard {
         }
     }
 
-    /// Forgets the indices, e.g. after the mesh was changed outside `apply_edit` (a time
+    /// Forgets the index, e.g. after the mesh was changed outside `apply_edit` (a time
     /// step moving every vertex).
     pub fn reset(&mut self) {
         self.end_state.reset();
-        self.index.reset();
     }
 
     fn veto(&mut self, hit: Hit) -> &'static str {
@@ -181,15 +178,16 @@ impl CollisionGuard {
 
 impl CollisionGuard {
     /// Steps 2–5 of the module doc (everything after the end-state test) for `edit`.
+    /// Runs after the end-state test, which brought the shared index up to date.
     fn sweep_checks(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), Hit> {
-        self.index.refresh(mesh);
         self.motion.build(mesh, edit);
+        let index = self.end_state.index();
         let result = if self.motion.swept.is_empty() {
-            sweep::check_retriangulation(&mut self.scratch, &self.index, mesh, edit, &self.motion)
+            sweep::check_retriangulation(&mut self.scratch, index, mesh, edit, &self.motion)
         } else {
             sweep::check_sweep(
                 &mut self.scratch,
-                &self.index,
+                index,
                 mesh,
                 edit,
                 &self.motion,
@@ -197,14 +195,9 @@ impl CollisionGuard {
             )
         };
         result.and_then(|()| match self.options.min_distance {
-            Some(eps) if eps > 0.0 => sweep::check_proximity(
-                &mut self.scratch,
-                &self.index,
-                mesh,
-                edit,
-                &self.motion,
-                eps,
-            ),
+            Some(eps) if eps > 0.0 => {
+                sweep::check_proximity(&mut self.scratch, index, mesh, edit, &self.motion, eps)
+            }
             _ => Ok(()),
         })
     }
@@ -243,18 +236,5 @@ impl EditGuard for CollisionGuard {
 
     fn committed(&mut self, mesh: &LabeledMesh, edit: &Edit, applied: &Applied) {
         self.end_state.committed(mesh, edit, applied);
-        for &t in &edit.remove_tris {
-            self.index.mark(mesh, t);
-        }
-        for &t in &applied.triangles {
-            self.index.mark(mesh, t);
-        }
-        for m in &edit.moves {
-            if mesh.is_vertex_alive(m.vertex) {
-                for t in mesh.vertex_triangles(m.vertex) {
-                    self.index.mark(mesh, t);
-                }
-            }
-        }
     }
 }

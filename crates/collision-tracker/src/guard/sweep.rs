@@ -3,12 +3,12 @@
 //! (Los Topos §5's tunnelling test, El Topo §3.5.2's flip test).
 
 use glam::DVec3;
+use mesh_core::TriangleIndex;
 use mesh_core::broadphase::Aabb;
 use mesh_core::predicates::{Sign, orient3d};
 use mesh_core::remesh::{Edit, VertexRef};
 use mesh_core::{LabeledMesh, TriId};
 
-use super::index::TriangleIndex;
 use super::motion::{Motion, Swept};
 use crate::ccd::{CcdOptions, ccd_edge_edge_with, ccd_vertex_triangle_with};
 use crate::proximity::{proximity_edge_edge, proximity_vertex_triangle};
@@ -64,7 +64,7 @@ fn gather_pool(
     bounds: &Aabb,
 ) {
     s.candidates.clear();
-    index.query(bounds, &mut s.candidates);
+    index.query(bounds, |t| s.candidates.push(t));
     s.candidates.sort_unstable();
     s.candidates.dedup();
     s.pool.clear();
