@@ -24,11 +24,10 @@
 //! free-surface features keep what improvement gives them.
 
 use glam::DVec3;
-use mesh_core::geometry::unit_normal;
-use mesh_core::remesh::{Edit, EditGuard, VertexAttributes, VertexMove, apply_edit};
+use mesh_core::remesh::{
+    Edit, EditGuard, VertexAttributes, VertexMove, apply_edit, max_label_volume_change, normal_cos,
+};
 use mesh_core::{Label, LabeledMesh, VertexId};
-
-use crate::t1t2::label_volume_change;
 
 /// Options of [`relax_walls`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -59,6 +58,7 @@ pub(crate) fn relax_walls(
 ) -> RelaxReport {
     let mut report = RelaxReport::default();
     let mut edit = Edit::default();
+    let mut volumes = Vec::new();
     for _ in 0..options.passes {
         let vertices: Vec<VertexId> = mesh.vertices().collect();
         let moved_before = report.moved;
@@ -77,7 +77,7 @@ pub(crate) fn relax_walls(
                 blend: None,
             });
             if turns(mesh, v, target)
-                || label_volume_change(mesh, &edit, v) > options.max_volume_change
+                || max_label_volume_change(mesh, &edit, &mut volumes) > options.max_volume_change
             {
                 report.refused += 1;
                 continue;
@@ -169,7 +169,6 @@ fn turns(mesh: &LabeledMesh, v: VertexId, target: DVec3) -> bool {
         let old = mesh.tri_positions(t);
         let tri = mesh.tri(t);
         let new = [0, 1, 2].map(|k| if tri[k] == v { target } else { old[k] });
-        let n = unit_normal(&new);
-        n == DVec3::ZERO || unit_normal(&old).dot(n) < 0.5
+        normal_cos(&old, &new).is_none_or(|c| c < 0.5)
     })
 }

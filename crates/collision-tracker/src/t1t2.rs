@@ -19,20 +19,20 @@
 //! shortening the edge — with an ambient flow, `e · (∇u e) < 0` at the edge's midpoint;
 //! otherwise, when the step's motion of its two ends brings them closer. Separation acts
 //! only where the strength is positive, so the two never undo each other. The collapse is
-//! one [`Edit`] through the collision guard (its pseudo-motion: both ends move to the
-//! midpoint); it may leave coincident triangles (a flattened tetrahedron), which T2 then
-//! removes. If the stage nevertheless ends with a mesh that fails `validate` layers 1–3,
+//! mesh-core's [`collapse_edge`] in its [`CollapsePlacement::Midpoint`] mode, through the
+//! collision guard (its pseudo-motion: both ends move to the midpoint); it may leave
+//! coincident triangles (a flattened tetrahedron), which T2 then removes. If the stage nevertheless ends with a mesh that fails `validate` layers 1–3,
 //! it is run again from a snapshot without `initiate`, so the stage never breaks a step.
 
 use glam::{DMat3, DVec3};
-use mesh_core::geometry::{signed_cone_volume, unit_normal};
 use mesh_core::remesh::{
-    AreaDecrease, Blend, Edit, EditError, EditGuard, FeatureParams, SeparationParams,
-    SeparationStrength, VelocityDivergence, VertexAttributes, VertexMove, VertexRef, apply_edit,
-    classify_vertex, pinch_singular_vertices, remove_degenerate, separate_irregular_vertices,
+    AreaDecrease, CollapseParams, CollapsePlacement, Edit, EditGuard, FeatureParams,
+    SeparationParams, SeparationStrength, VelocityDivergence, VertexAttributes, VertexRef,
+    classify_vertex, collapse_edge, pinch_singular_vertices, remove_degenerate,
+    separate_irregular_vertices,
 };
 use mesh_core::validate::{ValidateOptions, check_geometry};
-use mesh_core::{Label, LabeledMesh, TopologyEvents, VertexId};
+use mesh_core::{LabeledMesh, TopologyEvents, VertexId};
 use rayon::prelude::*;
 
 use crate::guard::CollisionGuard;
@@ -94,9 +94,8 @@ pub(crate) fn separate_regions(
     let snapshot = mesh.clone();
     let snapshot_motion = motion.clone();
     let mut counts = T1T2Counts::default();
-    let mut edit = Edit::default();
     for &(a, b) in &candidates {
-        if initiate_collapse(mesh, motion, guard, options, a, b, &mut edit) {
+        if initiate_collapse(mesh, motion, guard, options, a, b) {
             counts.initiated += 1;
         }
     }
@@ -212,8 +211,10 @@ fn shortening(
     }
 }
 
-/// Collapses edge `ab` to its midpoint, allowing degenerate results (see the module doc).
-/// Returns whether it was committed.
+/// Collapses edge `ab` to its midpoint, allowing degenerate results (see the module doc):
+/// mesh-core's collapse with [`CollapsePlacement::Midpoint`], refused where a surviving
+/// triangle would turn by 90° or more, or a label's volume change by more than Ω. Returns
+/// whether it was committed.
 fn initiate_collapse(
     mesh: &mut LabeledMesh,
     motion: &mut VertexAttributes,
@@ -221,102 +222,20 @@ fn initiate_collapse(
     options: &T1T2Options,
     a: VertexId,
     b: VertexId,
-    edit: &mut Edit,
 ) -> bool {
-    if !(mesh.is_vertex_alive(a) && mesh.is_vertex_alive(b)) {
+    if !(mesh.is_vertex_alive(a) && mesh.is_vertex_alive(b))
+        || mesh.position(a).distance(mesh.position(b)) >= options.min_edge_length
+    {
         return false;
     }
-    let (pa, pb) = (mesh.position(a), mesh.position(b));
-    if mesh.edge_triangles(a, b).next().is_none() || pa.distance(pb) >= options.min_edge_length {
-        return false;
-    }
-    let target = 0.5 * (pa + pb);
-    edit.clear();
-    for t in mesh.vertex_triangles(b) {
-        let tri = mesh.tri(t);
-        if tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] {
-            return false;
-        }
-        edit.remove_tris.push(t);
-        if !tri.contains(&a) {
-            let verts = tri.map(|v| VertexRef::Old(if v == b { a } else { v }));
-            edit.add_tris.push((verts, mesh.labels(t)));
-        }
-    }
-    edit.moves.push(VertexMove {
-        vertex: a,
-        end: target,
-        blend: Some(Blend::lerp(a, b, 0.5)),
-    });
-    edit.moves.push(VertexMove {
-        vertex: b,
-        end: target,
-        blend: None,
-    });
-    edit.remove_vertices.push(b);
-    if inverts(mesh, edit, a, b) || label_volume_change(mesh, edit, a) > options.max_volume_change {
-        return false;
-    }
-    match apply_edit(mesh, motion, guard, edit) {
-        Ok(_) => true,
-        Err(
-            EditError::Vetoed(_)
-            | EditError::Malformed(_)
-            | EditError::Structure(_)
-            | EditError::Mesh(_),
-        ) => false,
-    }
-}
-
-/// True when a surviving triangle at `a` or `b` would turn over (its normal rotates by
-/// 90° or more) or degenerate.
-fn inverts(mesh: &LabeledMesh, edit: &Edit, a: VertexId, b: VertexId) -> bool {
-    let end = |v: VertexId| edit.end_position(mesh, VertexRef::Old(v));
-    [a, b].iter().any(|&v| {
-        mesh.vertex_triangles(v).any(|t| {
-            let tri = mesh.tri(t);
-            if tri.contains(&a) && tri.contains(&b) {
-                return false;
-            }
-            let old = unit_normal(&mesh.tri_positions(t));
-            let new = unit_normal(&tri.map(end));
-            new == DVec3::ZERO || old.dot(new) <= 0.0
-        })
-    })
-}
-
-/// The largest change of any label's volume the collapse causes (cone volumes from the
-/// position of `a`; kept triangles of `a` move with it).
-pub(crate) fn label_volume_change(mesh: &LabeledMesh, edit: &Edit, a: VertexId) -> f64 {
-    let r = mesh.position(a);
-    let mut change: Vec<(Label, f64)> = Vec::new();
-    let mut add = |labels: [Label; 2], p: [DVec3; 3], sign: f64| {
-        let v = sign * signed_cone_volume(p[0] - r, p[1] - r, p[2] - r);
-        for (l, dv) in [(labels[1], v), (labels[0], -v)] {
-            match change.iter_mut().find(|e| e.0 == l) {
-                Some(e) => e.1 += dv,
-                None => change.push((l, dv)),
-            }
-        }
+    let params = CollapseParams {
+        placement: CollapsePlacement::Midpoint,
+        allow_degenerate: true,
+        min_normal_cos: 0.0,
+        max_volume_change: options.max_volume_change,
+        ..CollapseParams::default()
     };
-    let end = |v: VertexRef| edit.end_position(mesh, v);
-    for &t in &edit.remove_tris {
-        add(mesh.labels(t), mesh.tri_positions(t), -1.0);
-    }
-    for (verts, labels) in &edit.add_tris {
-        add(*labels, verts.map(end), 1.0);
-    }
-    for t in mesh.vertex_triangles(a) {
-        if !edit.remove_tris.contains(&t) {
-            add(mesh.labels(t), mesh.tri_positions(t), -1.0);
-            add(
-                mesh.labels(t),
-                mesh.tri(t).map(|v| end(VertexRef::Old(v))),
-                1.0,
-            );
-        }
-    }
-    change.iter().fold(0.0, |m, e| m.max(e.1.abs()))
+    collapse_edge(mesh, motion, guard, a, b, &params).is_ok()
 }
 
 /// The T1 separation strength of Los Topos §5: the ambient flow's divergence along the

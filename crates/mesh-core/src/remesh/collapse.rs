@@ -11,7 +11,9 @@
 //! a convex patch); a feature vertex (ridge, corner, curve) keeps its place
 //! against a smooth one; two ridge vertices merge at the midpoint only along their ridge;
 //! two vertices of a feature curve merge only along a curve edge, onto one endpoint, so
-//! the curve keeps its vertices exactly. Everything else is refused.
+//! the curve keeps its vertices exactly. Everything else is refused. In the
+//! [`CollapsePlacement::Midpoint`] mode (the collision tracker's T1/T2-initiating
+//! collapse) the endpoints always meet at the midpoint and their kinds are not asked.
 //!
 //! **Refusals** (the mesh is untouched): joining two feature curves through a non-feature
 //! edge (a pinch, which would glue two curves into one and change topology); a violated
@@ -54,6 +56,22 @@ pub struct CollapseParams {
     /// every label's volume (see the module doc). Default false (see
     /// [`super::ImproveParams::conserve_volume`]).
     pub conserve_volume: bool,
+    /// Where the merged vertex goes. Default [`CollapsePlacement::Features`].
+    pub placement: CollapsePlacement,
+}
+
+/// Where [`collapse_edge`] puts the merged vertex.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub enum CollapsePlacement {
+    /// By the endpoints' kinds (see the module doc); collapses that would join two feature
+    /// curves or corners, and so change topology, are refused. Mesh improvement's collapse.
+    #[default]
+    Features,
+    /// Always the midpoint, whatever the endpoints' kinds: the collapse that *starts* a T1
+    /// or T2 process (Los Topos §5–6) by joining exactly the feature curves and corners
+    /// that improvement keeps apart. Pair it with `allow_degenerate`: it may flatten a
+    /// tetrahedron into coincident triangles, which T2 then removes.
+    Midpoint,
 }
 
 impl Default for CollapseParams {
@@ -66,6 +84,7 @@ impl Default for CollapseParams {
             ridge_alignment_cos: 30f64.to_radians().cos(),
             allow_degenerate: false,
             conserve_volume: false,
+            placement: CollapsePlacement::Features,
         }
     }
 }
@@ -212,11 +231,18 @@ pub(crate) fn collapse_edge_in(
             return Err(CollapseRefusal::NoEdge.into());
         }
     }
-    let curve_edge = features::edge_star(mesh, corner).is_feature();
     let (pa, pb) = (mesh.position(a), mesh.position(b));
-    let ka = features::classify_vertex(mesh, a, &params.features);
-    let kb = features::classify_vertex(mesh, b, &params.features);
-    let t = placement(ka, kb, curve_edge, (pb - pa).normalize_or_zero(), params)?;
+    // The endpoints' kinds, where the placement asks for them.
+    let (kinds, t) = match params.placement {
+        CollapsePlacement::Features => {
+            let curve_edge = features::edge_star(mesh, corner).is_feature();
+            let ka = features::classify_vertex(mesh, a, &params.features);
+            let kb = features::classify_vertex(mesh, b, &params.features);
+            let t = placement(ka, kb, curve_edge, (pb - pa).normalize_or_zero(), params)?;
+            (Some((ka, kb)), t)
+        }
+        CollapsePlacement::Midpoint => (None, 0.5),
+    };
     let mut target = if t == 0.0 {
         pa
     } else if t == 1.0 {
@@ -262,8 +288,8 @@ pub(crate) fn collapse_edge_in(
     });
     edit.remove_vertices.push(b);
 
-    if let (true, VertexKind::Smooth { normal: na }, VertexKind::Smooth { normal: nb }) =
-        (params.conserve_volume, ka, kb)
+    if let (true, Some((VertexKind::Smooth { normal: na }, VertexKind::Smooth { normal: nb }))) =
+        (params.conserve_volume, kinds)
     {
         // Two smooth vertices meet at the midpoint, a chord below (or above) the surface
         // they sampled: the shift puts the merged vertex where the volume is kept. A
@@ -530,6 +556,58 @@ pub(crate) mod tests {
                 "angle {angle}"
             );
         }
+        assert_eq!(m.to_raw(), before);
+    }
+
+    /// The T1/T2-initiating mode joins the two curve vertices that the feature placement
+    /// refuses to pinch, at the midpoint, and stays refused where a triangle would turn
+    /// over.
+    #[test]
+    fn midpoint_mode_joins_what_feature_placement_refuses() {
+        let mut m = double_box();
+        let (a, b) = (VertexId::new(1), VertexId::new(10));
+        let (pa, pb) = (m.position(a), m.position(b));
+        let p = CollapseParams {
+            placement: CollapsePlacement::Midpoint,
+            allow_degenerate: true,
+            min_normal_cos: 0.0,
+            ..CollapseParams::default()
+        };
+        collapse_edge(
+            &mut m,
+            &mut VertexAttributes::none(),
+            &mut NoGuard,
+            a,
+            b,
+            &p,
+        )
+        .expect("the initiating collapse");
+        assert_eq!(m.position(a), 0.5 * (pa + pb));
+        assert!(!m.is_vertex_alive(b));
+        // Asking for more than a quarter turn of every survivor refuses it, mesh untouched.
+        let mut m = double_box();
+        let before = m.to_raw();
+        let strict = CollapseParams {
+            min_normal_cos: 1.0,
+            ..p
+        };
+        let r = collapse_edge(
+            &mut m,
+            &mut VertexAttributes::none(),
+            &mut NoGuard,
+            a,
+            b,
+            &strict,
+        );
+        assert!(
+            matches!(
+                r,
+                Err(CollapseError::Refused(
+                    CollapseRefusal::NormalChange | CollapseRefusal::Inversion
+                ))
+            ),
+            "{r:?}"
+        );
         assert_eq!(m.to_raw(), before);
     }
 

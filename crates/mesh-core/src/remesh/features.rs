@@ -370,7 +370,10 @@ pub fn classify_vertices(mesh: &LabeledMesh, params: &FeatureParams) -> Vec<Vert
 /// triangles and the end state of kept moved triangles count in (each triangle adds its
 /// cone volume to its back label and subtracts it from its front label, as in
 /// [`geometry::label_volumes`]). `buf` is scratch space.
-pub(crate) fn max_label_volume_change(
+///
+/// Public because every operation bounded by Ω needs it, in mesh-core and in the
+/// backends' own edits (the collision tracker's wall relaxation).
+pub fn max_label_volume_change(
     mesh: &LabeledMesh,
     edit: &Edit,
     buf: &mut Vec<(Label, f64)>,
@@ -471,7 +474,7 @@ pub(crate) fn conserve_volume_along(
 /// Unit-free cosine of the angle between the normals of two triangles, or `None` when
 /// either is degenerate.
 #[inline]
-pub(crate) fn normal_cos(old: &[DVec3; 3], new: &[DVec3; 3]) -> Option<f64> {
+pub fn normal_cos(old: &[DVec3; 3], new: &[DVec3; 3]) -> Option<f64> {
     let (a, b) = (geometry::unit_normal(old), geometry::unit_normal(new));
     (a != DVec3::ZERO && b != DVec3::ZERO).then(|| a.dot(b))
 }
@@ -479,12 +482,13 @@ pub(crate) fn normal_cos(old: &[DVec3; 3], new: &[DVec3; 3]) -> Option<f64> {
 /// Certified test that the right-hand normals of `old` and `new` point into the same half
 /// space: `n_old · n_new > 0` evaluated in floating point and accepted only when it
 /// exceeds a forward error bound. Conservative: an uncertain sign (or a degenerate
-/// triangle) counts as an inversion, so a `true` is never wrong.
+/// triangle) counts as an inversion, so a `true` is never wrong. The inversion test of
+/// every operation that moves or re-forms triangles, here and in the backends.
 ///
 /// Bound: each normal component `a_j b_k − a_k b_j` of differences carries an error below
 /// `4u·(|a_j b_k| + |a_k b_j|)`; the dot product of two such vectors then errs by less than
 /// `(2·4 + 3 + O(u))·u·Σ Mᵒᵢ Mⁿᵢ` with `Mᵢ` the component magnitudes — 16u leaves margin.
-pub(crate) fn normals_agree(old: &[DVec3; 3], new: &[DVec3; 3]) -> bool {
+pub fn normals_agree(old: &[DVec3; 3], new: &[DVec3; 3]) -> bool {
     let cross_mag = |p: &[DVec3; 3]| {
         let (a, b) = (p[1] - p[0], p[2] - p[0]);
         let n = a.cross(b);

@@ -36,10 +36,15 @@ pub mod split;
 pub mod structure;
 
 pub use attributes::{Blend, VertexAttributes};
-pub use collapse::{CollapseError, CollapseParams, CollapseRefusal, collapse_edge};
+pub use collapse::{
+    CollapseError, CollapseParams, CollapsePlacement, CollapseRefusal, collapse_edge,
+};
 pub use degenerate::{DegenerateReport, remove_degenerate, remove_degenerate_in};
 pub use edit::{Applied, Edit, EditError, NewVertex, VertexMove, VertexRef, apply_edit};
-pub use features::{FeatureParams, VertexKind, classify_vertex, classify_vertices};
+pub use features::{
+    FeatureParams, VertexKind, classify_vertex, classify_vertices, max_label_volume_change,
+    normal_cos, normals_agree,
+};
 pub use flip::{FlipCriterion, FlipError, FlipParams, FlipRefusal, flip_edge};
 pub use guard::{EditGuard, NoGuard, StaticIntersectionGuard, bisect_moves};
 pub use improve::{
