@@ -85,20 +85,37 @@ pub fn bisect_moves<G: EditGuard + ?Sized>(
 
 /// True when `edit` is a batch in the sense of [`EditGuard::offending_moves`]: moves only,
 /// no triangle with two moved vertices.
+///
+/// `claimed` must be all false on entry (it grows to the mesh as needed); on return it is
+/// true at every triangle of a moved vertex, whatever the answer, until [`release`] clears
+/// exactly those entries. Why not clear it here: a smoothing pass asks once per batch of a
+/// few hundred moves, and clearing a flag per triangle slot each time made every batch
+/// cost as much as the whole mesh.
 pub(crate) fn is_batch(mesh: &LabeledMesh, edit: &Edit, claimed: &mut Vec<bool>) -> bool {
     if !edit.remove_tris.is_empty() || !edit.add_tris.is_empty() || !edit.new_vertices.is_empty() {
         return false;
     }
-    claimed.clear();
-    claimed.resize(mesh.triangle_capacity(), false);
+    if claimed.len() < mesh.triangle_capacity() {
+        claimed.resize(mesh.triangle_capacity(), false);
+    }
+    let mut batch = true;
     for m in &edit.moves {
         for t in mesh.vertex_triangles(m.vertex) {
-            if std::mem::replace(&mut claimed[t.idx()], true) {
-                return false;
+            batch &= !std::mem::replace(&mut claimed[t.idx()], true);
+        }
+    }
+    batch
+}
+
+/// Clears the entries [`is_batch`] set for `edit` (the mesh unchanged since).
+pub(crate) fn release(mesh: &LabeledMesh, edit: &Edit, claimed: &mut [bool]) {
+    for m in &edit.moves {
+        for t in mesh.vertex_triangles(m.vertex) {
+            if let Some(c) = claimed.get_mut(t.idx()) {
+                *c = false;
             }
         }
     }
-    true
 }
 
 /// Allows everything.
@@ -309,6 +326,7 @@ impl EditGuard for StaticIntersectionGuard {
         let mut claimed = std::mem::take(&mut self.claimed);
         let batch = is_batch(mesh, edit, &mut claimed);
         if !batch {
+            release(mesh, edit, &mut claimed);
             self.claimed = claimed;
             return match self.check(mesh, edit) {
                 Ok(()) => None,
@@ -405,6 +423,7 @@ impl EditGuard for StaticIntersectionGuard {
             .flatten()
             .collect();
         let mut blamed: Vec<usize> = blamed.into_iter().flatten().collect();
+        release(mesh, edit, &mut claimed);
         self.claimed = claimed;
         blamed.sort_unstable();
         blamed.dedup();
@@ -453,6 +472,42 @@ mod tests {
                 blend: None,
             }],
             ..Edit::default()
+        }
+    }
+
+    /// A batch check leaves no claim behind, whether the moves formed a batch or not (two
+    /// neighbours), so the next batch starts from a clean slate without clearing the
+    /// whole mesh's flags.
+    #[test]
+    fn batch_checks_release_their_claims() {
+        let mesh = sphere();
+        let mut guard = StaticIntersectionGuard::new();
+        let far = |v: u32| {
+            let p = mesh.position(VertexId::new(v));
+            VertexMove {
+                vertex: VertexId::new(v),
+                end: p * 1.001,
+                blend: None,
+            }
+        };
+        let a = VertexId::new(0);
+        let t0 = mesh.vertex_triangles(a).next().expect("a triangle at 0");
+        let b = *mesh.tri(t0).iter().find(|&&v| v != a).expect("a neighbour");
+        let apart = (1..mesh.num_vertices() as u32)
+            .find(|&w| {
+                let w = VertexId::new(w);
+                !mesh
+                    .vertex_triangles(a)
+                    .any(|t| mesh.vertex_triangles(w).any(|u| u == t))
+            })
+            .expect("a vertex sharing no triangle with 0");
+        for moves in [vec![far(0), far(apart)], vec![far(0), far(b.raw())]] {
+            let edit = Edit {
+                moves,
+                ..Edit::default()
+            };
+            assert_eq!(guard.offending_moves(&mesh, &edit), None);
+            assert!(guard.claimed.iter().all(|&c| !c), "claims left set");
         }
     }
 
