@@ -91,7 +91,7 @@ impl MergeOptions {
 
     /// The defaults for `mesh`, from its mean edge length.
     pub fn for_mesh(mesh: &LabeledMesh) -> Self {
-        Self::for_length(mean_edge_length(mesh))
+        Self::for_length(mesh_core::remesh::improve::mean_edge_length(mesh))
     }
 }
 
@@ -578,14 +578,4 @@ fn interfaces(mesh: &LabeledMesh) -> BTreeSet<[Label; 2]> {
             if a < b { [a, b] } else { [b, a] }
         })
         .collect()
-}
-
-/// Mean length of the triangles' edges (each interior edge counted once per triangle).
-fn mean_edge_length(mesh: &LabeledMesh) -> f64 {
-    let (sum, n) = mesh.triangles().fold((0.0, 0usize), |(sum, n), t| {
-        let [a, b, c] = mesh.tri_positions(t);
-        let l = |p: DVec3, q: DVec3| (p - q).length();
-        (sum + l(a, b) + l(b, c) + l(c, a), n + 3)
-    });
-    if n == 0 { 0.0 } else { sum / n as f64 }
 }
