@@ -48,24 +48,33 @@ impl Found {
     }
 }
 
+/// The broad-phase box of triangle slot `t`: EMPTY (overlapping nothing) unless `usable`
+/// (then its vertex ids are safe to look up) and every coordinate is finite, so that the
+/// slot's id is its item id in the BVH.
+fn checkable_box(mesh: &LabeledMesh, t: u32, usable: bool) -> Aabb {
+    if !usable {
+        return Aabb::EMPTY;
+    }
+    let p = mesh.tri_positions(TriId::new(t));
+    if p.iter().all(|q| q.is_finite()) {
+        Aabb::from_points(&p)
+    } else {
+        Aabb::EMPTY
+    }
+}
+
 /// Runs layer 4: every intersecting pair counted, the `cap` smallest (by ids) listed.
 pub(super) fn check(mesh: &LabeledMesh, ctx: &EdgeContext, cap: usize) -> Listed<[TriId; 2]> {
     let tris = mesh.tris();
     // One box per triangle slot, EMPTY (overlapping nothing) for those not checked, so
     // the item id is the triangle id.
+    // `usable` first: only then are the vertex ids safe to look up.
     let box_of = |t: u32| {
-        let id = TriId::new(t);
-        let t = t as usize;
-        // `usable` first: only then are the vertex ids safe to look up.
-        if !ctx.usable[t] || is_degenerate(tris[t]) {
-            return Aabb::EMPTY;
-        }
-        let p = mesh.tri_positions(id);
-        if p.iter().all(|q| q.is_finite()) {
-            Aabb::from_points(&p)
-        } else {
-            Aabb::EMPTY
-        }
+        checkable_box(
+            mesh,
+            t,
+            ctx.usable[t as usize] && !is_degenerate(tris[t as usize]),
+        )
     };
     // Triangle slots fit in u32 (the mesh caps them), so the build cannot fail.
     let Ok(bvh) = Bvh::build_from_fn(tris.len(), box_of) else {
@@ -112,20 +121,11 @@ pub fn any_intersection(mesh: &LabeledMesh) -> bool {
     use std::sync::atomic::{AtomicBool, Ordering};
     let tris = mesh.tris();
     let box_of = |t: u32| {
-        let id = TriId::new(t);
         let tri = tris[t as usize];
-        let usable = mesh.is_triangle_alive(id)
+        let usable = mesh.is_triangle_alive(TriId::new(t))
             && tri.iter().all(|&v| mesh.is_vertex_alive(v))
             && !is_degenerate(tri);
-        if !usable {
-            return Aabb::EMPTY;
-        }
-        let p = mesh.tri_positions(id);
-        if p.iter().all(|q| q.is_finite()) {
-            Aabb::from_points(&p)
-        } else {
-            Aabb::EMPTY
-        }
+        checkable_box(mesh, t, usable)
     };
     let Ok(bvh) = Bvh::build_from_fn(tris.len(), box_of) else {
         return false;

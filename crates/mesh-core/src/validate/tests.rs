@@ -324,6 +324,41 @@ fn clean_sphere_passes_and_a_dented_one_fails() {
     assert!(r.self_intersecting_pairs.unwrap().count > 0);
 }
 
+/// The yes/no form of layer 4 agrees with the full count: no on a clean sphere, yes on a
+/// dented one and on two overlapping spheres, for any thread count; and it skips what
+/// layers 1–3 reject (a dead triangle, a repeated vertex) instead of panicking.
+#[test]
+fn any_intersection_answers_as_the_count_does() {
+    let c = DVec3::new(0.3, -0.2, 0.1);
+    let raw = icosphere(c, 2.0, 3, 1);
+    let dented = {
+        let (mut p, tris, labels) = raw.clone();
+        p[0] = c - (p[0] - c) * 1.5;
+        build((p, tris, labels))
+    };
+    let overlapping = build(concat(&[
+        icosphere(DVec3::ZERO, 1.0, 2, 1),
+        icosphere(DVec3::new(0.9, 0.3, 0.1), 0.8, 2, 2),
+    ]));
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool");
+        pool.install(|| {
+            assert!(!intersections::any_intersection(&build(raw.clone())));
+            assert!(intersections::any_intersection(&dented));
+            assert!(intersections::any_intersection(&overlapping));
+        });
+    }
+    let mut broken = dented.clone();
+    let [a, b, _] = broken.tri(t(0));
+    broken.remove_triangle(t(1)).expect("a live triangle");
+    let degenerate = broken.add_triangle([a, a, b], [Label::new(0), Label::new(1)]);
+    assert!(degenerate.is_ok(), "{degenerate:?}");
+    assert!(intersections::any_intersection(&broken));
+}
+
 #[test]
 fn broad_phase_misses_no_intersecting_pair() {
     // Two overlapping spheres: compare with the all-pairs narrow phase.
