@@ -21,7 +21,7 @@ use std::time::{Duration, Instant};
 use glam::IVec3;
 use mesh_core::remesh::{
     Applied, AreaDecrease, Edit, EditGuard, ImproveParams, ImproveRegion, ImproveReport, NoGuard,
-    StaticIntersectionGuard, VertexAttributes, improve, improve_in,
+    StaticIntersectionGuard, VertexAttributes, Veto, improve, improve_in,
 };
 use mesh_core::validate::{ValidateOptions, validate};
 use mesh_core::{LabeledMesh, StageTiming, TriId, VertexId};
@@ -531,13 +531,13 @@ impl LocalGuard<'_> {
 }
 
 impl EditGuard for LocalGuard<'_> {
-    fn check(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), &'static str> {
-        if !edit.remove_tris.iter().all(|&t| self.editable(t)) {
-            return Err("removes a triangle outside the changed region");
+    fn check(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), Veto> {
+        if let Some(&tri) = edit.remove_tris.iter().find(|&&t| !self.editable(t)) {
+            return Err(Veto::OutsideRegion { tri });
         }
         for m in &edit.moves {
-            if !mesh.vertex_triangles(m.vertex).all(|t| self.editable(t)) {
-                return Err("moves a vertex of a triangle outside the changed region");
+            if let Some(tri) = mesh.vertex_triangles(m.vertex).find(|&t| !self.editable(t)) {
+                return Err(Veto::OutsideRegion { tri });
             }
         }
         self.inner.check(mesh, edit)
@@ -580,9 +580,9 @@ struct DeadlineGuard<'g> {
 }
 
 impl EditGuard for DeadlineGuard<'_> {
-    fn check(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), &'static str> {
+    fn check(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), Veto> {
         if Instant::now() >= self.deadline {
-            return Err("the time budget is spent");
+            return Err(Veto::TimeBudget);
         }
         self.inner.check(mesh, edit)
     }

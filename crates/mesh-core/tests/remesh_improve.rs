@@ -24,7 +24,7 @@ struct TrackingGuard {
 }
 
 impl EditGuard for TrackingGuard {
-    fn check(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), &'static str> {
+    fn check(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), mesh_core::remesh::Veto> {
         self.inner.check(mesh, edit)
     }
 
@@ -35,11 +35,11 @@ impl EditGuard for TrackingGuard {
 }
 
 /// Refuses everything.
-struct Veto;
+struct VetoAll;
 
-impl EditGuard for Veto {
-    fn check(&mut self, _mesh: &LabeledMesh, _edit: &Edit) -> Result<(), &'static str> {
-        Err("test veto")
+impl EditGuard for VetoAll {
+    fn check(&mut self, _mesh: &LabeledMesh, _edit: &Edit) -> Result<(), mesh_core::remesh::Veto> {
+        Err(mesh_core::remesh::Veto::Other("test veto"))
     }
 }
 
@@ -202,18 +202,26 @@ fn vetoing_guard_leaves_the_mesh_bit_identical() {
         target_edge_length: Some(0.1),
         ..ImproveParams::default()
     };
-    let r = improve(&mut m, &params, &mut VertexAttributes::none(), &mut Veto);
+    let r = improve(&mut m, &params, &mut VertexAttributes::none(), &mut VetoAll);
     assert_eq!(m.to_raw(), before);
     assert_eq!(
         r.split.done + r.collapse.done + r.flip.done + r.smooth.done,
         0
     );
     assert!(r.split.vetoed > 0);
+    // Every veto is counted under the guard's reason, and only there.
+    let vetoed = r.split.vetoed + r.collapse.vetoed + r.flip.vetoed + r.smooth.vetoed;
+    assert_eq!(r.vetoes.keys().copied().collect::<Vec<_>>(), ["test veto"]);
+    assert!(
+        r.vetoes["test veto"] >= vetoed,
+        "{:?} vs {vetoed}",
+        r.vetoes
+    );
     let w = first_neighbour(&m);
     let e = split_edge(
         &mut m,
         &mut VertexAttributes::none(),
-        &mut Veto,
+        &mut VetoAll,
         VertexId::new(0),
         w,
         SplitPlacement::Midpoint,

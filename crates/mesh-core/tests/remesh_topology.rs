@@ -11,8 +11,8 @@ use glam::{DMat3, DVec3};
 use mesh_core::geometry::label_volumes;
 use mesh_core::remesh::{
     AreaDecrease, Edit, EditGuard, NoGuard, RegionGraph, SeparationParams, VelocityDivergence,
-    VertexAttributes, apply_edit, irregular_vertices, pinch_singular_vertices, remove_degenerate,
-    separate_irregular_vertices,
+    VertexAttributes, Veto, apply_edit, irregular_vertices, pinch_singular_vertices,
+    remove_degenerate, separate_irregular_vertices,
 };
 use mesh_core::validate::{ValidateOptions, validate};
 use mesh_core::{Label, LabeledMesh, VertexId};
@@ -251,8 +251,8 @@ fn assert_volumes_close(before: &BTreeMap<Label, f64>, after: &BTreeMap<Label, f
 struct VetoAll;
 
 impl EditGuard for VetoAll {
-    fn check(&mut self, _mesh: &LabeledMesh, _edit: &Edit) -> Result<(), &'static str> {
-        Err("vetoed by test")
+    fn check(&mut self, _mesh: &LabeledMesh, _edit: &Edit) -> Result<(), Veto> {
+        Err(Veto::Other("vetoed by test"))
     }
 }
 
@@ -264,17 +264,17 @@ struct EndStateGuard {
 }
 
 impl EditGuard for EndStateGuard {
-    fn check(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), &'static str> {
+    fn check(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), Veto> {
         self.checked += 1;
         let mut copy = mesh.clone();
         apply_edit(&mut copy, &mut VertexAttributes::none(), &mut NoGuard, edit)
-            .map_err(|_| "malformed")?;
+            .map_err(|_| Veto::Other("malformed"))?;
         let report = validate(&copy, &ValidateOptions::with_intersections());
         if report.is_valid() {
             Ok(())
         } else {
             eprintln!("end state invalid: {report:?}");
-            Err("end state invalid")
+            Err(Veto::Other("end state invalid"))
         }
     }
 }

@@ -59,7 +59,7 @@ mod sweep;
 pub(crate) mod tests;
 
 use mesh_core::LabeledMesh;
-use mesh_core::remesh::{Applied, Edit, EditGuard, StaticIntersectionGuard};
+use mesh_core::remesh::{Applied, Edit, EditGuard, StaticIntersectionGuard, Veto};
 
 use crate::ccd::CcdOptions;
 use motion::Motion;
@@ -150,27 +150,27 @@ impl CollisionGuard {
         self.end_state.reset();
     }
 
-    fn veto(&mut self, hit: Hit) -> &'static str {
+    fn veto(&mut self, hit: Hit) -> Veto {
         match hit {
             Hit::VertexTriangle => {
                 self.stats.vetoed_ccd += 1;
-                "pseudo-motion collides: a vertex hits a triangle"
+                Veto::SweepVertexTriangle
             }
             Hit::EdgeEdge => {
                 self.stats.vetoed_ccd += 1;
-                "pseudo-motion collides: two edges hit"
+                Veto::SweepEdgeEdge
             }
             Hit::Tunnel => {
                 self.stats.vetoed_tunnel += 1;
-                "a vertex lies in the volume a triangle sweeps"
+                Veto::SweptVolume
             }
             Hit::FlipVolume => {
                 self.stats.vetoed_flip += 1;
-                "a vertex lies in the tetrahedron a flip sweeps"
+                Veto::FlipVolume
             }
             Hit::Proximity => {
                 self.stats.vetoed_proximity += 1;
-                "edit brings elements closer than the minimum distance"
+                Veto::TooClose
             }
         }
     }
@@ -204,7 +204,7 @@ impl CollisionGuard {
 }
 
 impl EditGuard for CollisionGuard {
-    fn check(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), &'static str> {
+    fn check(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), Veto> {
         if self.options.unchecked {
             return Ok(());
         }

@@ -198,11 +198,15 @@ fn only_approaching_surfaces_merge_under_the_approach_gate() {
 struct VetoSnaps;
 
 impl mesh_core::remesh::EditGuard for VetoSnaps {
-    fn check(&mut self, _m: &LabeledMesh, e: &mesh_core::remesh::Edit) -> Result<(), &'static str> {
+    fn check(
+        &mut self,
+        _m: &LabeledMesh,
+        e: &mesh_core::remesh::Edit,
+    ) -> Result<(), mesh_core::remesh::Veto> {
         if e.remove_vertices.is_empty() || e.moves.is_empty() {
             Ok(())
         } else {
-            Err("no snaps in this test")
+            Err(mesh_core::remesh::Veto::Other("no snaps in this test"))
         }
     }
 }

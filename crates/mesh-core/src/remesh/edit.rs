@@ -14,7 +14,7 @@ use crate::ids::{Label, MAX_INDEX, TriId, VertexId};
 use crate::mesh::LabeledMesh;
 
 use super::attributes::{Blend, VertexAttributes};
-use super::guard::EditGuard;
+use super::guard::{EditGuard, Veto};
 use super::structure::{StructureFault, StructureScratch, check_structure};
 
 /// A vertex an edit's new triangles refer to: an existing one or one the edit adds.
@@ -79,7 +79,7 @@ pub struct Applied {
 pub enum EditError {
     /// The guard refused the pseudo-motion.
     #[error("edit vetoed by the guard: {0}")]
-    Vetoed(&'static str),
+    Vetoed(Veto),
     /// The edit refers to something that does not exist or is malformed.
     #[error("malformed edit: {0}")]
     Malformed(String),
@@ -96,7 +96,7 @@ impl EditError {
     /// A short fixed name of the reason (the guard's own for a veto).
     pub fn reason(&self) -> &'static str {
         match self {
-            EditError::Vetoed(why) => why,
+            EditError::Vetoed(veto) => veto.kind(),
             EditError::Malformed(_) => "malformed",
             EditError::Structure(_) => "structure",
             EditError::Mesh(_) => "mesh capacity",

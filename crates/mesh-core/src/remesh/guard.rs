@@ -17,14 +17,76 @@ use crate::triangle_index::TriangleIndex;
 
 use super::edit::{Applied, Edit, VertexRef};
 
-/// Consulted before each edit; `Err(reason)` vetoes it.
+/// Why a guard refused an edit: which check failed and, where the check can name them, the
+/// elements involved. [`Veto::kind`] is a short fixed name, for counting vetoes per kind
+/// ([`super::ImproveReport::vetoes`]) without formatting a message for each.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum Veto {
+    /// A triangle the edit adds or moves would intersect triangle `other` of the mesh.
+    #[error("end state intersects triangle {other}")]
+    EndStateIntersects {
+        /// The mesh's triangle that would be hit.
+        other: TriId,
+    },
+    /// Two triangles of the edit's own end state would intersect.
+    #[error("end state intersects itself")]
+    EndStateSelfIntersects,
+    /// The pseudo-motion (El Topo §3.5) collides: a vertex hits a triangle.
+    #[error("pseudo-motion collides: a vertex hits a triangle")]
+    SweepVertexTriangle,
+    /// The pseudo-motion collides: two edges hit.
+    #[error("pseudo-motion collides: two edges hit")]
+    SweepEdgeEdge,
+    /// A vertex lies in the volume a moving triangle sweeps (a small component tunnelling).
+    #[error("a vertex lies in the volume a triangle sweeps")]
+    SweptVolume,
+    /// A vertex lies in the tetrahedron a flip sweeps.
+    #[error("a vertex lies in the tetrahedron a flip sweeps")]
+    FlipVolume,
+    /// The edit brings non-adjacent elements closer than the guard's minimum distance.
+    #[error("edit brings elements closer than the minimum distance")]
+    TooClose,
+    /// The edit removes or deforms triangle `tri`, outside the region the guard lets change
+    /// (the grid tracker's local improvement).
+    #[error("edit changes triangle {tri}, outside the region that may change")]
+    OutsideRegion {
+        /// The first such triangle.
+        tri: TriId,
+    },
+    /// The time budget is spent.
+    #[error("the time budget is spent")]
+    TimeBudget,
+    /// A guard's own reason (guards written outside this workspace, tests).
+    #[error("{0}")]
+    Other(&'static str),
+}
+
+impl Veto {
+    /// A short fixed name of the check that failed.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Veto::EndStateIntersects { .. } => "end state intersects the mesh",
+            Veto::EndStateSelfIntersects => "end state intersects itself",
+            Veto::SweepVertexTriangle => "sweep: vertex-triangle",
+            Veto::SweepEdgeEdge => "sweep: edge-edge",
+            Veto::SweptVolume => "swept volume",
+            Veto::FlipVolume => "flip volume",
+            Veto::TooClose => "too close",
+            Veto::OutsideRegion { .. } => "outside the region",
+            Veto::TimeBudget => "time budget",
+            Veto::Other(why) => why,
+        }
+    }
+}
+
+/// Consulted before each edit; `Err(veto)` refuses it.
 ///
 /// A guard follows the mesh through [`super::apply_edit`], which calls
 /// [`EditGuard::committed`] after every edit it commits, so guards that index the mesh can
 /// stay current cheaply.
 pub trait EditGuard {
     /// Decides on `edit`, seen against the mesh *before* it is applied.
-    fn check(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), &'static str>;
+    fn check(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), Veto>;
 
     /// Told after `edit` was committed (`mesh` is the mesh after it).
     fn committed(&mut self, _mesh: &LabeledMesh, _edit: &Edit, _applied: &Applied) {}
@@ -123,7 +185,7 @@ pub(crate) fn release(mesh: &LabeledMesh, edit: &Edit, claimed: &mut [bool]) {
 pub struct NoGuard;
 
 impl EditGuard for NoGuard {
-    fn check(&mut self, _mesh: &LabeledMesh, _edit: &Edit) -> Result<(), &'static str> {
+    fn check(&mut self, _mesh: &LabeledMesh, _edit: &Edit) -> Result<(), Veto> {
         Ok(())
     }
 }
@@ -249,7 +311,7 @@ impl StaticIntersectionGuard {
 }
 
 impl EditGuard for StaticIntersectionGuard {
-    fn check(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), &'static str> {
+    fn check(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), Veto> {
         self.index.refresh(mesh);
         self.next_epoch(mesh);
         // The edit's own removed and moved triangles are never candidates.
@@ -304,14 +366,14 @@ impl EditGuard for StaticIntersectionGuard {
             }
             for a in &self.changed {
                 if a.bounds.overlaps(&c.bounds) && intersect_keyed(a, &c) {
-                    return Err("end state intersects the mesh");
+                    return Err(Veto::EndStateIntersects { other: t });
                 }
             }
         }
         for (i, a) in self.changed.iter().enumerate() {
             for b in &self.changed[i + 1..] {
                 if a.bounds.overlaps(&b.bounds) && intersect_keyed(a, b) {
-                    return Err("end state intersects itself");
+                    return Err(Veto::EndStateSelfIntersects);
                 }
             }
         }
@@ -518,8 +580,15 @@ mod tests {
         let v = VertexId::new(0);
         let p = mesh.position(v);
         assert!(guard.check(&mesh, &move_edit(v, p * 1.01)).is_ok());
-        // Through the centre and out of the other side: its fan crosses the far triangles.
-        assert!(guard.check(&mesh, &move_edit(v, -p * 1.5)).is_err());
+        // Through the centre and out of the other side: its fan crosses the far triangles,
+        // and the veto names one of them.
+        match guard.check(&mesh, &move_edit(v, -p * 1.5)) {
+            Err(Veto::EndStateIntersects { other }) => {
+                assert!(mesh.is_triangle_alive(other));
+                assert!(!mesh.tri(other).contains(&v), "a far triangle, not v's own");
+            }
+            r => panic!("{r:?}"),
+        }
     }
 
     /// After many committed edits (the dirty list, then a rebuild), the guard still agrees

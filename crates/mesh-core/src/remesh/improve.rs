@@ -42,7 +42,7 @@ use super::degenerate::{DegenerateReport, remove_degenerate_in};
 use super::edit::{Applied, Edit, EditError};
 use super::features::{self, FeatureParams};
 use super::flip::{self, FlipCriterion, FlipError, FlipParams, flip_edge_in};
-use super::guard::EditGuard;
+use super::guard::{EditGuard, Veto};
 use super::pinch::pinch_singular_vertices_in;
 use super::separate::{
     AreaDecrease, SeparationParams, SeparationReport, SeparationStrength,
@@ -201,6 +201,10 @@ pub struct ImproveReport {
     /// Collapses refused or vetoed, per reason ([`CollapseError::reason`]): which check
     /// holds the mesh back when short edges stay.
     pub collapse_refusals: BTreeMap<&'static str, usize>,
+    /// The guard's vetoes of every operation's edits, per kind ([`Veto::kind`]): which of
+    /// the guard's checks refuses (batched smoothing counts a blamed move when it is
+    /// retried alone).
+    pub vetoes: BTreeMap<&'static str, usize>,
     /// Edge flips.
     pub flip: OpCounts,
     /// Smoothing moves.
@@ -353,6 +357,7 @@ pub fn improve_in(
             break;
         }
     }
+    run.report.vetoes = std::mem::take(&mut recorder.vetoes);
     // Where the time went (`RUST_LOG=mesh_core=debug`): wall seconds per operation,
     // summed over the sweeps.
     tracing::debug!(
@@ -414,6 +419,8 @@ struct Recorder<'g> {
     smoothed: usize,
     /// `log[..in_work]` has joined the current sweep's work list.
     in_work: usize,
+    /// The guard's vetoes, per kind ([`ImproveReport::vetoes`]).
+    vetoes: BTreeMap<&'static str, usize>,
 }
 
 impl<'g> Recorder<'g> {
@@ -424,6 +431,7 @@ impl<'g> Recorder<'g> {
             log: Vec::new(),
             smoothed: 0,
             in_work: 0,
+            vetoes: BTreeMap::new(),
         }
     }
 
@@ -480,8 +488,12 @@ fn neighbourhood(mesh: &LabeledMesh, vertices: &[VertexId]) -> Vec<VertexId> {
 }
 
 impl EditGuard for Recorder<'_> {
-    fn check(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), &'static str> {
-        self.inner.check(mesh, edit)
+    fn check(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), Veto> {
+        let verdict = self.inner.check(mesh, edit);
+        if let Err(veto) = verdict {
+            *self.vetoes.entry(veto.kind()).or_default() += 1;
+        }
+        verdict
     }
 
     fn offending_moves(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Option<Vec<usize>> {

@@ -46,7 +46,7 @@ pub use features::{
     normal_cos, normals_agree,
 };
 pub use flip::{FlipCriterion, FlipError, FlipParams, FlipRefusal, flip_edge};
-pub use guard::{EditGuard, NoGuard, StaticIntersectionGuard, bisect_moves};
+pub use guard::{EditGuard, NoGuard, StaticIntersectionGuard, Veto, bisect_moves};
 pub use improve::{
     ImproveParams, ImproveRegion, ImproveReport, OpCounts, improve, improve_in, improve_with,
 };

@@ -28,7 +28,7 @@ use crate::mesh::LabeledMesh;
 
 use super::attributes::{Blend, VertexAttributes};
 use super::edit::{Edit, EditError, NewVertex, VertexMove, VertexRef, apply_snap_edit};
-use super::guard::EditGuard;
+use super::guard::{EditGuard, Veto};
 
 /// Parameters of [`snap_vertices`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -349,7 +349,7 @@ pub fn undo_split(
 struct Trusted<'a>(&'a mut dyn EditGuard);
 
 impl EditGuard for Trusted<'_> {
-    fn check(&mut self, _mesh: &LabeledMesh, _edit: &Edit) -> Result<(), &'static str> {
+    fn check(&mut self, _mesh: &LabeledMesh, _edit: &Edit) -> Result<(), Veto> {
         Ok(())
     }
 
