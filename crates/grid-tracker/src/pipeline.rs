@@ -531,6 +531,13 @@ impl LocalGuard<'_> {
 }
 
 impl EditGuard for LocalGuard<'_> {
+    fn check_vertex(&mut self, mesh: &LabeledMesh, v: VertexId) -> Result<(), Veto> {
+        match mesh.vertex_triangles(v).find(|&t| !self.editable(t)) {
+            Some(tri) => Err(Veto::OutsideRegion { tri }),
+            None => self.inner.check_vertex(mesh, v),
+        }
+    }
+
     fn check(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), Veto> {
         if let Some(&tri) = edit.remove_tris.iter().find(|&&t| !self.editable(t)) {
             return Err(Veto::OutsideRegion { tri });
@@ -580,6 +587,10 @@ struct DeadlineGuard<'g> {
 }
 
 impl EditGuard for DeadlineGuard<'_> {
+    fn check_vertex(&mut self, mesh: &LabeledMesh, v: VertexId) -> Result<(), Veto> {
+        self.inner.check_vertex(mesh, v)
+    }
+
     fn check(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), Veto> {
         if Instant::now() >= self.deadline {
             return Err(Veto::TimeBudget);

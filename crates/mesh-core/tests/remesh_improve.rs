@@ -8,7 +8,7 @@ use glam::DVec3;
 use mesh_core::geometry::label_volumes;
 use mesh_core::remesh::{
     Applied, Edit, EditError, EditGuard, ImproveParams, ImproveReport, SplitPlacement,
-    StaticIntersectionGuard, VertexAttributes, classify_vertex, improve, split_edge,
+    StaticIntersectionGuard, VertexAttributes, Veto, classify_vertex, improve, split_edge,
 };
 use mesh_core::validate::{ValidateOptions, validate};
 use mesh_core::{Label, LabeledMesh, VertexId, generators};
@@ -192,6 +192,86 @@ fn small_foam_improves_and_validates() {
     assert_valid(&m, "after improve");
     assert!(r.edges_in_range >= 0.9, "in range: {}", r.edges_in_range);
     assert_volumes(&before, &m, &r);
+}
+
+/// Fences off the triangles on one side of a plane, as the grid tracker's local
+/// improvement fences off the untouched surface: `check` refuses any edit that removes or
+/// deforms a fenced triangle; with `early`, `check_vertex` gives that answer up front.
+struct Fence {
+    fenced: Vec<bool>,
+    early: bool,
+}
+
+impl Fence {
+    fn new(mesh: &LabeledMesh, early: bool) -> Fence {
+        let fenced = (0..mesh.triangle_capacity())
+            .map(|t| {
+                let t = mesh_core::TriId::new(t as u32);
+                let p = mesh.tri_positions(t);
+                mesh.is_triangle_alive(t) && p[0].x + p[1].x + p[2].x > 0.9
+            })
+            .collect();
+        Fence { fenced, early }
+    }
+
+    fn outside(&self, mesh: &LabeledMesh, v: VertexId) -> Result<(), Veto> {
+        match mesh
+            .vertex_triangles(v)
+            .find(|t| self.fenced.get(t.idx()).copied().unwrap_or(false))
+        {
+            Some(tri) => Err(Veto::OutsideRegion { tri }),
+            None => Ok(()),
+        }
+    }
+}
+
+impl EditGuard for Fence {
+    fn check(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), Veto> {
+        if let Some(&tri) = edit
+            .remove_tris
+            .iter()
+            .find(|t| self.fenced.get(t.idx()).copied().unwrap_or(false))
+        {
+            return Err(Veto::OutsideRegion { tri });
+        }
+        edit.moves
+            .iter()
+            .try_for_each(|m| self.outside(mesh, m.vertex))
+    }
+
+    fn check_vertex(&mut self, mesh: &LabeledMesh, v: VertexId) -> Result<(), Veto> {
+        if self.early {
+            self.outside(mesh, v)
+        } else {
+            Ok(())
+        }
+    }
+}
+
+/// `check_vertex` only saves work: the operations that ask it (collapses, smoothing) skip
+/// what `check` would refuse anyway, and the improved mesh is the same bit for bit.
+#[test]
+fn up_front_vertex_vetoes_change_nothing_but_the_work() {
+    let run = |early: bool| {
+        let mut m = noisy_sphere(3, 0.05, 5);
+        let mut guard = Fence::new(&m, early);
+        let params = ImproveParams {
+            target_edge_length: Some(0.35),
+            ..ImproveParams::default()
+        };
+        let r = improve(&mut m, &params, &mut VertexAttributes::none(), &mut guard);
+        (m.to_raw(), r)
+    };
+    let (late, r_late) = run(false);
+    let (early, r_early) = run(true);
+    assert!(
+        r_late.collapse.done > 0 && r_late.smooth.done > 0,
+        "{r_late:?}"
+    );
+    assert!(r_late.vetoes["outside the region"] > 0, "{r_late:?}");
+    assert!(early == late, "the up-front answer changed the mesh");
+    assert_eq!(r_early.collapse.done, r_late.collapse.done);
+    assert_eq!(r_early.smooth.done, r_late.smooth.done);
 }
 
 #[test]

@@ -231,6 +231,8 @@ pub(crate) fn collapse_edge_in(
             return Err(CollapseRefusal::NoEdge.into());
         }
     }
+    // b is removed whatever the placement: a guard that refuses that refuses the edit.
+    guard.check_vertex(mesh, b).map_err(EditError::Vetoed)?;
     let (pa, pb) = (mesh.position(a), mesh.position(b));
     // The endpoints' kinds, where the placement asks for them.
     let (kinds, t) = match params.placement {

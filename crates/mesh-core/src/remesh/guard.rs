@@ -10,7 +10,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::broadphase::Aabb;
-use crate::ids::TriId;
+use crate::ids::{TriId, VertexId};
 use crate::mesh::LabeledMesh;
 use crate::predicates;
 use crate::triangle_index::TriangleIndex;
@@ -90,6 +90,19 @@ pub trait EditGuard {
 
     /// Told after `edit` was committed (`mesh` is the mesh after it).
     fn committed(&mut self, _mesh: &LabeledMesh, _edit: &Edit, _applied: &Applied) {}
+
+    /// A cheap necessary condition of [`EditGuard::check`] for every edit that moves or
+    /// removes vertex `v`: `Err` means each such edit would be vetoed, for this reason.
+    /// Default: no objection.
+    ///
+    /// Why: the operations ask it before they build and measure a candidate edit, so a
+    /// guard that fences part of the mesh off (the grid tracker's local improvement, whose
+    /// border vertices are in every work list) costs a few lookups per fenced candidate
+    /// instead of a whole evaluation. Measured on `fix` of six bunnies: 34k of the guard's
+    /// 34.3k vetoes were of that kind.
+    fn check_vertex(&mut self, _mesh: &LabeledMesh, _v: VertexId) -> Result<(), Veto> {
+        Ok(())
+    }
 
     /// Decides on a *batch*: an edit that only moves vertices, no two of which share a
     /// triangle (batched smoothing). `None`: the whole batch may be committed, exactly as

@@ -500,6 +500,14 @@ impl EditGuard for Recorder<'_> {
         self.inner.offending_moves(mesh, edit)
     }
 
+    fn check_vertex(&mut self, mesh: &LabeledMesh, v: VertexId) -> Result<(), Veto> {
+        let verdict = self.inner.check_vertex(mesh, v);
+        if let Err(veto) = verdict {
+            *self.vetoes.entry(veto.kind()).or_default() += 1;
+        }
+        verdict
+    }
+
     fn committed(&mut self, mesh: &LabeledMesh, edit: &Edit, applied: &Applied) {
         self.inner.committed(mesh, edit, applied);
         if self.recording {

@@ -208,6 +208,10 @@ pub(crate) fn commit_moves(
         let mut changes: Vec<(f64, Proposal)> = Vec::with_capacity(checked.len());
         for (c, p) in checked.into_iter().zip(&batch) {
             match c {
+                // A move the guard refuses whatever else happens: a batch would blame it
+                // and its retry alone would be vetoed, so it is vetoed here (the levels,
+                // computed with it, keep every other move's order).
+                Some(_) if guard.check_vertex(mesh, p.vertex).is_err() => out.vetoed += 1,
                 Some((m, dv)) => {
                     edit.moves.push(m);
                     changes.push((dv, *p));
