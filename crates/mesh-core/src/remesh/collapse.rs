@@ -562,8 +562,7 @@ pub(crate) mod tests {
     }
 
     /// The T1/T2-initiating mode joins the two curve vertices that the feature placement
-    /// refuses to pinch, at the midpoint, and stays refused where a triangle would turn
-    /// over.
+    /// refuses to pinch, at the midpoint; the geometric checks still hold it back.
     #[test]
     fn midpoint_mode_joins_what_feature_placement_refuses() {
         let mut m = double_box();
@@ -584,9 +583,9 @@ pub(crate) mod tests {
             &p,
         )
         .expect("the initiating collapse");
-        assert_eq!(m.position(a), 0.5 * (pa + pb));
+        assert!(m.position(a).distance(0.5 * (pa + pb)) < 1e-12);
         assert!(!m.is_vertex_alive(b));
-        // Asking for more than a quarter turn of every survivor refuses it, mesh untouched.
+        // Allowing the survivors no turn at all refuses it, and the mesh is untouched.
         let mut m = double_box();
         let before = m.to_raw();
         let strict = CollapseParams {
