@@ -111,7 +111,7 @@ pub(super) fn check(mesh: &LabeledMesh, ctx: &EdgeContext, cap: usize) -> Listed
 /// Whether any two triangles of `mesh` meet anywhere but along what they share: layer 4 as
 /// a yes/no question, for a mesh that passes layers 1–3.
 ///
-/// Why not [`check`]: a caller that only asks whether a mesh is clean (`fix` deciding
+/// Why not the full layer 4 ([`super::check_intersections`]): a caller that only asks whether a mesh is clean (`fix` deciding
 /// whether its input needs repair) has no use for the count and list of every pair, and
 /// on a mesh that is not clean — the usual input of a repair — the first pair is found
 /// long before the last: once one is found, every task skips its remaining exact tests.
