@@ -21,7 +21,8 @@
 //! only where the strength is positive, so the two never undo each other. The collapse is
 //! mesh-core's [`collapse_edge`] in its [`CollapsePlacement::Midpoint`] mode, through the
 //! collision guard (its pseudo-motion: both ends move to the midpoint); it may leave
-//! coincident triangles (a flattened tetrahedron), which T2 then removes. If the stage nevertheless ends with a mesh that fails `validate` layers 1–3,
+//! coincident triangles (a flattened tetrahedron), which T2 then removes. If the stage
+//! nevertheless ends with a mesh that fails `validate` layers 1–3,
 //! it is run again from a snapshot without `initiate`, so the stage never breaks a step.
 
 use glam::{DMat3, DVec3};

@@ -449,6 +449,14 @@ impl<'g> Recorder<'g> {
         self.in_work = self.log.len();
     }
 
+    /// Counts a veto of the inner guard by kind and passes the verdict on.
+    fn count(&mut self, verdict: Result<(), Veto>) -> Result<(), Veto> {
+        if let Err(veto) = verdict {
+            *self.vetoes.entry(veto.kind()).or_default() += 1;
+        }
+        verdict
+    }
+
     /// The neighbourhood of the vertices noted since the last smoothing pass.
     fn take_smoothing(&mut self, mesh: &LabeledMesh) -> Vec<VertexId> {
         let out = neighbourhood(mesh, &self.log[self.smoothed..]);
@@ -490,10 +498,7 @@ fn neighbourhood(mesh: &LabeledMesh, vertices: &[VertexId]) -> Vec<VertexId> {
 impl EditGuard for Recorder<'_> {
     fn check(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), Veto> {
         let verdict = self.inner.check(mesh, edit);
-        if let Err(veto) = verdict {
-            *self.vetoes.entry(veto.kind()).or_default() += 1;
-        }
-        verdict
+        self.count(verdict)
     }
 
     fn offending_moves(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Option<Vec<usize>> {
@@ -502,10 +507,7 @@ impl EditGuard for Recorder<'_> {
 
     fn check_vertex(&mut self, mesh: &LabeledMesh, v: VertexId) -> Result<(), Veto> {
         let verdict = self.inner.check_vertex(mesh, v);
-        if let Err(veto) = verdict {
-            *self.vetoes.entry(veto.kind()).or_default() += 1;
-        }
-        verdict
+        self.count(verdict)
     }
 
     fn committed(&mut self, mesh: &LabeledMesh, edit: &Edit, applied: &Applied) {

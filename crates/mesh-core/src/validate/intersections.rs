@@ -5,9 +5,9 @@
 //! self-pair traversal yields each overlapping pair once. Narrow phase, exact
 //! ([`intersect_keyed_triangle_triangle`]), chosen by how many vertex ids the two
 //! triangles share:
-//! - none: [`intersect_triangle_triangle`](crate::predicates::intersect_triangle_triangle) (closed: touching counts);
-//! - one vertex `v`: [`intersect_sharing_vertex`](crate::predicates::intersect_sharing_vertex) — meeting anywhere but at `v`;
-//! - one edge `vw`: [`intersect_sharing_edge`](crate::predicates::intersect_sharing_edge) — overlapping beyond `vw` (a fold);
+//! - none: [`intersect_triangle_triangle`] (closed: touching counts);
+//! - one vertex `v`: [`intersect_sharing_vertex`] — meeting anywhere but at `v`;
+//! - one edge `vw`: [`intersect_sharing_edge`] — overlapping beyond `vw` (a fold);
 //! - all three: a duplicate, reported by layer 1, not here.
 //!
 //! The predicates run their own floating-point filters (box test, certain plane
@@ -16,6 +16,10 @@
 //! non-coplanar triangles of a smooth surface — costs a few tens of nanoseconds per pair.
 //! Triangles with a repeated vertex or a non-finite coordinate are left out (layers 1 and
 //! 3 report them).
+//!
+//! [`intersect_triangle_triangle`]: crate::predicates::intersect_triangle_triangle
+//! [`intersect_sharing_vertex`]: crate::predicates::intersect_sharing_vertex
+//! [`intersect_sharing_edge`]: crate::predicates::intersect_sharing_edge
 
 use super::report::Listed;
 use super::topology::{EdgeContext, is_degenerate};
@@ -111,9 +115,9 @@ pub(super) fn check(mesh: &LabeledMesh, ctx: &EdgeContext, cap: usize) -> Listed
 /// Whether any two triangles of `mesh` meet anywhere but along what they share: layer 4 as
 /// a yes/no question, for a mesh that passes layers 1–3.
 ///
-/// Why not the full layer 4 ([`super::check_intersections`]): a caller that only asks whether a mesh is clean (`fix` deciding
-/// whether its input needs repair) has no use for the count and list of every pair, and
-/// on a mesh that is not clean — the usual input of a repair — the first pair is found
+/// Why not the full layer 4 ([`super::check_intersections`]): a caller that only asks
+/// whether a mesh is clean (`fix` deciding whether its input needs repair) has no use for
+/// the count and list of every pair, and on a mesh that is not clean — the usual input of a repair — the first pair is found
 /// long before the last: once one is found, every task skips its remaining exact tests.
 /// Triangles that layers 1–3 would reject (dead, dangling, degenerate, non-finite) are
 /// left out, so any mesh is safe to ask. The answer does not depend on the thread count.
