@@ -263,6 +263,19 @@ pub fn irregular_vertices(mesh: &LabeledMesh) -> Vec<VertexId> {
         .collect()
 }
 
+/// How many of `vertices` (live or not) are irregular, examined in parallel.
+pub fn count_irregular(mesh: &LabeledMesh, vertices: &[VertexId]) -> usize {
+    vertices
+        .par_iter()
+        .with_min_len(64)
+        .filter(|&&v| mesh.is_vertex_alive(v))
+        .map_init(RegionGraph::new, |graph, &v| {
+            graph.build(mesh, v);
+            usize::from(!graph.is_complete())
+        })
+        .sum()
+}
+
 #[cfg(test)]
 mod tests {
     use glam::DVec3;

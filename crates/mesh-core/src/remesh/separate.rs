@@ -226,17 +226,7 @@ pub fn separate_irregular_vertices_in(
     if !scanned_current {
         report.irregular_remaining = match only {
             None => super::region_graph::irregular_vertices(mesh).len(),
-            Some(vertices) => {
-                let mut graph = RegionGraph::new();
-                vertices
-                    .iter()
-                    .filter(|&&v| mesh.is_vertex_alive(v))
-                    .filter(|&&v| {
-                        graph.build(mesh, v);
-                        !graph.is_complete()
-                    })
-                    .count()
-            }
+            Some(vertices) => super::region_graph::count_irregular(mesh, vertices),
         };
     }
     report
