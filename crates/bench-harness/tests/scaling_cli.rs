@@ -58,7 +58,7 @@ fn scaling_runs_fix_and_step_points_and_fits_slopes() {
         let name = format!("fix: {}", stage["stage"].as_str().unwrap());
         assert!(what.contains(&name.as_str()), "{name} not in {what:?}");
     }
-    assert!(what.contains(&"fix: all stages") && what.contains(&"grid: seconds per step"));
+    assert!(what.contains(&"fix: total") && what.contains(&"grid: seconds per step"));
     for file in ["report.md", "fix_scaling.svg", "steps_scaling.svg"] {
         assert!(dir.path().join("sc").join(file).is_file(), "{file}");
     }

@@ -63,7 +63,7 @@ pub(super) fn run(args: &FixArgs) -> anyhow::Result<ExitCode> {
         };
         println!("{}", serde_json::to_string_pretty(&record)?);
     } else {
-        let total: f64 = report.stages.iter().map(|s| s.seconds).sum();
+        let total = report.seconds;
         let c = &report.volume_check;
         println!("{}", report.cell_size_choice.reason);
         for v in &report.volumes {
