@@ -71,11 +71,18 @@ pub(crate) fn proximate_pairs(mesh: &LabeledMesh, d: f64) -> Vec<Candidate> {
 
 /// The vertices of `t` against `u`, and (once per unordered triangle pair: when `t < u`)
 /// the edges of `t` against the edges of `u`.
+///
+/// Every element pair is first tested by boxes grown by `d`: two elements closer than `d`
+/// have boxes that close, and most pairs the broad phase hands over are neighbours on one
+/// sheet (their triangles share a vertex, so their boxes always overlap) whose other
+/// elements are a whole edge apart; the exact distance then runs only for the few that
+/// can be near.
 fn pairs_of(mesh: &LabeledMesh, t: TriId, u: TriId, d: f64, out: &mut Vec<Candidate>) {
     let (vt, vu) = (mesh.tri(t), mesh.tri(u));
     let (pt, pu) = (mesh.tri_positions(t), mesh.tri_positions(u));
+    let near_u = Aabb::from_points(&pu).inflated(d);
     for k in 0..3 {
-        if vu.contains(&vt[k]) {
+        if vu.contains(&vt[k]) || !near_u.overlaps(&Aabb::new(pt[k], pt[k])) {
             continue;
         }
         let prox = proximity_vertex_triangle(pt[k], pu);
@@ -93,7 +100,11 @@ fn pairs_of(mesh: &LabeledMesh, t: TriId, u: TriId, d: f64, out: &mut Vec<Candid
         let (a, b) = (i, (i + 1) % 3);
         for j in 0..3 {
             let (c, e) = (j, (j + 1) % 3);
-            if [vu[c], vu[e]].iter().any(|w| *w == vt[a] || *w == vt[b]) {
+            if [vu[c], vu[e]].iter().any(|w| *w == vt[a] || *w == vt[b])
+                || !Aabb::from_points(&[pt[a], pt[b]])
+                    .inflated(d)
+                    .overlaps(&Aabb::from_points(&[pu[c], pu[e]]))
+            {
                 continue;
             }
             let prox = proximity_edge_edge(pt[a], pt[b], pu[c], pu[e]);
