@@ -32,6 +32,9 @@ pub(crate) struct Scratch {
     candidates: Vec<TriId>,
     /// The static rest near a whole edit, with boxes ([`gather_pool`]).
     pool: Vec<(Near, Aabb)>,
+    /// The pool's distinct vertices, and distinct edges with boxes, sorted by key.
+    pool_vertices: Vec<(u32, DVec3)>,
+    pool_edges: Vec<([u32; 2], [DVec3; 2], Aabb)>,
     near: Vec<Near>,
     vertices: Vec<(u32, DVec3)>,
     edges: Vec<([u32; 2], [DVec3; 2])>,
@@ -53,8 +56,9 @@ fn gather(
     select(s, bounds);
 }
 
-/// The static rest near `bounds` into `s.pool`, with each triangle's box: one index query
-/// for a whole edit, which [`select`] then narrows per swept triangle.
+/// The static rest near `bounds` into `s.pool`, with each triangle's box, and its distinct
+/// vertices and edges: one index query and one sort for a whole edit, which [`select`]
+/// then narrows per swept triangle.
 fn gather_pool(
     s: &mut Scratch,
     index: &TriangleIndex,
@@ -68,6 +72,8 @@ fn gather_pool(
     s.candidates.sort_unstable();
     s.candidates.dedup();
     s.pool.clear();
+    s.pool_vertices.clear();
+    s.pool_edges.clear();
     for &t in &s.candidates {
         if !mesh.is_triangle_alive(t) || edit.remove_tris.contains(&t) || motion.is_moved_kept(t) {
             continue;
@@ -75,33 +81,53 @@ fn gather_pool(
         let p = mesh.tri_positions(t);
         let b = Aabb::from_points(&p);
         if b.overlaps(bounds) {
-            s.pool.push(((mesh.tri(t).map(|v| v.raw()), p), b));
+            let key = mesh.tri(t).map(|v| v.raw());
+            s.pool.push(((key, p), b));
+            for k in 0..3 {
+                s.pool_vertices.push((key[k], p[k]));
+                let (i, j) = (k, (k + 1) % 3);
+                let (a, b) = if key[i] < key[j] { (i, j) } else { (j, i) };
+                let ends = [p[a], p[b]];
+                s.pool_edges
+                    .push(([key[a], key[b]], ends, Aabb::from_points(&ends)));
+            }
         }
     }
+    s.pool_vertices.sort_unstable_by_key(|x| x.0);
+    s.pool_vertices.dedup_by(|x, y| x.0 == y.0);
+    s.pool_edges.sort_unstable_by_key(|x| x.0);
+    s.pool_edges.dedup_by(|x, y| x.0 == y.0);
 }
 
-/// The pooled triangles whose box overlaps `bounds` into `s.near`, with their distinct
-/// vertices and edges.
+/// The pooled triangles whose box overlaps `bounds` into `s.near`, and the pooled
+/// vertices and edges that can meet something inside `bounds`: the vertices not
+/// strictly outside it, the edges whose box overlaps it. (A static element outside a
+/// swept triangle's box can meet it neither in CCD, whose swept-box test rejects it, nor in
+/// the tunnelling test, whose tetrahedron lies in that box; an edit's neighbourhood pools
+/// a hundred triangles, and sorting their elements again for each swept triangle cost
+/// more than the tests.)
 fn select(s: &mut Scratch, bounds: &Aabb) {
     s.near.clear();
     s.vertices.clear();
     s.edges.clear();
-    for &((key, p), b) in &s.pool {
-        if !b.overlaps(bounds) {
-            continue;
-        }
-        s.near.push((key, p));
-        for k in 0..3 {
-            s.vertices.push((key[k], p[k]));
-            let (i, j) = (k, (k + 1) % 3);
-            let (a, b) = if key[i] < key[j] { (i, j) } else { (j, i) };
-            s.edges.push(([key[a], key[b]], [p[a], p[b]]));
+    for &(near, b) in &s.pool {
+        if b.overlaps(bounds) {
+            s.near.push(near);
         }
     }
-    s.vertices.sort_unstable_by_key(|x| x.0);
-    s.vertices.dedup_by(|x, y| x.0 == y.0);
-    s.edges.sort_unstable_by_key(|x| x.0);
-    s.edges.dedup_by(|x, y| x.0 == y.0);
+    let outside = |p: DVec3| p.cmplt(bounds.min).any() || p.cmpgt(bounds.max).any();
+    s.vertices.extend(
+        s.pool_vertices
+            .iter()
+            .filter(|(_, p)| !outside(*p))
+            .copied(),
+    );
+    s.edges.extend(
+        s.pool_edges
+            .iter()
+            .filter(|(_, _, b)| b.overlaps(bounds))
+            .map(|&(key, ends, _)| (key, ends)),
+    );
 }
 
 /// Swept triangles per edit up to which one index query with the box around them all
@@ -332,18 +358,33 @@ pub(crate) fn check_proximity(
     eps: f64,
 ) -> Result<(), Hit> {
     // Each changed triangle with whether the edit creates it.
-    let changed = edit.add_tris.iter().map(|(v, _)| (*v, true)).chain(
-        motion
-            .moved_kept
-            .iter()
-            .map(|&t| (mesh.tri(t).map(VertexRef::Old), false)),
-    );
-    for (verts, added) in changed {
+    let changed = || {
+        edit.add_tris.iter().map(|(v, _)| (*v, true)).chain(
+            motion
+                .moved_kept
+                .iter()
+                .map(|&t| (mesh.tri(t).map(VertexRef::Old), false)),
+        )
+    };
+    let end_bounds = |verts: &[VertexRef; 3]| {
+        Aabb::from_points(&verts.map(|r| edit.end_position(mesh, r))).inflated(eps)
+    };
+    // One pool for the whole edit, as in `check_sweep`.
+    let pooled = edit.add_tris.len() + motion.moved_kept.len() <= MAX_POOLED;
+    if pooled {
+        let all = changed().fold(Aabb::EMPTY, |u, (verts, _)| u.union(end_bounds(&verts)));
+        gather_pool(s, index, mesh, edit, motion, &all);
+    }
+    for (verts, added) in changed() {
         let key = verts.map(|r| motion.key(r));
         let x1 = verts.map(|r| edit.end_position(mesh, r));
         let x0 = verts.map(|r| edit.start_position(mesh, r));
-        let bounds = Aabb::from_points(&x1).inflated(eps);
-        gather(s, index, mesh, edit, motion, &bounds);
+        let bounds = end_bounds(&verts);
+        if pooled {
+            select(s, &bounds);
+        } else {
+            gather(s, index, mesh, edit, motion, &bounds);
+        }
         // A pair that started at least as close is the flow's, not the edit's — but only
         // for elements that existed before the edit. A new element has no meaningful
         // start: a split vertex starts where it ends, and a flip's new diagonal (nothing
