@@ -182,6 +182,7 @@ impl CollisionGuard {
     fn sweep_checks(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), Hit> {
         self.motion.build(mesh, edit);
         let index = self.end_state.index();
+        let eps = self.options.min_distance.filter(|&e| e > 0.0);
         let result = if self.motion.swept.is_empty() {
             sweep::check_retriangulation(&mut self.scratch, index, mesh, edit, &self.motion)
         } else {
@@ -192,13 +193,14 @@ impl CollisionGuard {
                 edit,
                 &self.motion,
                 &self.options.ccd,
+                eps.unwrap_or(0.0),
             )
         };
-        result.and_then(|()| match self.options.min_distance {
-            Some(eps) if eps > 0.0 => {
+        result.and_then(|()| match eps {
+            Some(eps) => {
                 sweep::check_proximity(&mut self.scratch, index, mesh, edit, &self.motion, eps)
             }
-            _ => Ok(()),
+            None => Ok(()),
         })
     }
 }

@@ -32,6 +32,9 @@ pub(crate) struct Scratch {
     candidates: Vec<TriId>,
     /// The static rest near a whole edit, with boxes ([`gather_pool`]).
     pool: Vec<(Near, Aabb)>,
+    /// The box the pool was gathered for, for the edit being checked (a later check of the
+    /// same edit whose boxes lie inside it reuses the pool).
+    pool_bounds: Option<Aabb>,
     /// The pool's distinct vertices, and distinct edges with boxes, sorted by key.
     pool_vertices: Vec<(u32, DVec3)>,
     pool_edges: Vec<([u32; 2], [DVec3; 2], Aabb)>,
@@ -71,6 +74,7 @@ fn gather_pool(
     index.query(bounds, |t| s.candidates.push(t));
     s.candidates.sort_unstable();
     s.candidates.dedup();
+    s.pool_bounds = Some(*bounds);
     s.pool.clear();
     s.pool_vertices.clear();
     s.pool_edges.clear();
@@ -137,7 +141,9 @@ const MAX_POOLED: usize = 64;
 
 const EDGES: [(usize, usize); 3] = [(0, 1), (1, 2), (2, 0)];
 
-/// CCD of the pseudo-motion, then the swept-tetrahedron test.
+/// CCD of the pseudo-motion, then the swept-tetrahedron test. The pool is gathered for
+/// the swept boxes grown by `margin`, so that [`check_proximity`] with that distance can
+/// reuse it.
 pub(crate) fn check_sweep(
     s: &mut Scratch,
     index: &TriangleIndex,
@@ -145,6 +151,7 @@ pub(crate) fn check_sweep(
     edit: &Edit,
     motion: &Motion,
     ccd: &CcdOptions,
+    margin: f64,
 ) -> Result<(), Hit> {
     let pooled = motion.swept.len() <= MAX_POOLED;
     if pooled {
@@ -152,7 +159,9 @@ pub(crate) fn check_sweep(
             .swept
             .iter()
             .fold(Aabb::EMPTY, |u, t| u.union(t.bounds()));
-        gather_pool(s, index, mesh, edit, motion, &all);
+        gather_pool(s, index, mesh, edit, motion, &all.inflated(margin));
+    } else {
+        s.pool_bounds = None;
     }
     for (i, t) in motion.swept.iter().enumerate() {
         if pooled {
@@ -308,6 +317,7 @@ pub(crate) fn check_retriangulation(
     edit: &Edit,
     motion: &Motion,
 ) -> Result<(), Hit> {
+    s.pool_bounds = None;
     if edit.add_tris.is_empty() || edit.remove_tris.is_empty() || !edit.new_vertices.is_empty() {
         return Ok(());
     }
@@ -369,11 +379,17 @@ pub(crate) fn check_proximity(
     let end_bounds = |verts: &[VertexRef; 3]| {
         Aabb::from_points(&verts.map(|r| edit.end_position(mesh, r))).inflated(eps)
     };
-    // One pool for the whole edit, as in `check_sweep`.
+    // One pool for the whole edit, as in `check_sweep`: that check's own when it covers
+    // this one's boxes (it was grown by `eps` for this), else a new one.
     let pooled = edit.add_tris.len() + motion.moved_kept.len() <= MAX_POOLED;
     if pooled {
         let all = changed().fold(Aabb::EMPTY, |u, (verts, _)| u.union(end_bounds(&verts)));
-        gather_pool(s, index, mesh, edit, motion, &all);
+        let covered = s.pool_bounds.is_some_and(|p| {
+            all.is_empty() || (p.min.cmple(all.min).all() && all.max.cmple(p.max).all())
+        });
+        if !covered {
+            gather_pool(s, index, mesh, edit, motion, &all);
+        }
     }
     for (verts, added) in changed() {
         let key = verts.map(|r| motion.key(r));
