@@ -125,7 +125,7 @@ pub fn total_area(mesh: &LabeledMesh) -> f64 {
 }
 
 /// `f(0) + f(1) + … + f(n − 1)` on rayon, bit-identical for any thread count and from run
-/// to run: fixed runs of [`CHUNK`] indices are summed in index order, then the run sums in
+/// to run: fixed runs of `CHUNK` indices are summed in index order, then the run sums in
 /// run order.
 ///
 /// Why not `par_iter().sum()`: rayon associates a float sum along its work-stealing

@@ -531,7 +531,7 @@ pub struct AblateArgs {
     /// Memory guard: resident memory cap per child, MiB (Linux); 0 = off.
     #[arg(long, default_value_t = 8192)]
     pub max_memory_mib: u64,
-    /// Output directory (default: out/ablate-<scene>).
+    /// Output directory (default: `out/ablate-<scene>`).
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Print ablate.json on stdout instead of the table.

@@ -15,10 +15,10 @@
 //!    This is Los Topos §5's static test of the final positions of moved triangles against
 //!    all edges and of moved edges against all triangles.
 //! 2. **The sweep, by CCD** ([`crate::ccd`], no false negatives). The pseudo-motion is
-//!    described in [`motion`]: new vertices move from `start` to `end`, moved vertices from
-//!    their current position to `end`, and the swept triangles are the kept triangles that
-//!    move, the added triangles that move, and (for edge collapses and vertex snaps) the
-//!    deleted fan of the vertex that merges away. Each swept triangle is tested against
+//!    described in the guard's `motion` module: new vertices move from `start` to `end`,
+//!    moved vertices from their current position to `end`, and the swept triangles are
+//!    the kept triangles that move, the added triangles that move, and (for edge collapses
+//!    and vertex snaps) the deleted fan of the vertex that merges away. Each swept triangle is tested against
 //!    the static rest of the mesh (the live triangles the edit neither deletes nor moves):
 //!    every static vertex against the moving triangle, every moving vertex against every
 //!    static triangle, every moving edge against every static edge; and against the other

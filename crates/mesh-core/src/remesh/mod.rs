@@ -11,7 +11,7 @@
 //! - [`features`]: vertex classification (quadric tensor, feature curves) and null space;
 //! - [`split`], [`flip`], [`collapse`], [`smooth`]: the mesh-improvement operations
 //!   (El Topo §3.5–3.6);
-//! - [`improve`]: the driver that sweeps them to keep edge lengths in range;
+//! - [`improve()`]: the driver that sweeps them to keep edge lengths in range;
 //! - [`structure`]: the structural check every edit passes before it commits;
 //! - [`snap`]: vertex snapping and splits at given points (Los Topos §7.1 merging).
 //!

@@ -10,7 +10,7 @@
 //!   [`split_triangle_at`] trisects a triangle at a point of it: the compatible remeshing
 //!   that gives every vertex of a proximate pair a counterpart to snap to.
 //!
-//! Every operation is one [`Edit`] through [`apply_edit`], so the guard sees it as a
+//! Every operation is one [`Edit`] through [`super::apply_edit`], so the guard sees it as a
 //! pseudo-motion: split vertices appear at their final place on the old surface (which
 //! cannot create an intersection), and a snap moves both vertices to their average,
 //! carrying their triangles, exactly like a collapse.

@@ -1,4 +1,4 @@
-//! Structural safety per edit: [`check_structure`] decides, before anything changes,
+//! Structural safety per edit: `check_structure` decides, before anything changes,
 //! whether an [`Edit`]'s end state keeps the invariants of layers 1–3 of
 //! [`crate::validate`] around everything the edit touches — no boundary edge, no
 //! degenerate, duplicate or zero-area triangle, finite positions, and around every touched
