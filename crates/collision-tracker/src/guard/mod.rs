@@ -18,9 +18,9 @@
 //!    described in the guard's `motion` module: new vertices move from `start` to `end`,
 //!    moved vertices from their current position to `end`, and the swept triangles are
 //!    the kept triangles that move, the added triangles that move, and (for edge collapses
-//!    and vertex snaps) the deleted fan of the vertex that merges away. Each swept triangle is tested against
-//!    the static rest of the mesh (the live triangles the edit neither deletes nor moves):
-//!    every static vertex against the moving triangle, every moving vertex against every
+//!    and vertex snaps) the deleted fan of the vertex that merges away. Each swept
+//!    triangle is tested against the static rest of the mesh (the live triangles the edit
+//!    neither deletes nor moves): every static vertex against the moving triangle, every moving vertex against every
 //!    static triangle, every moving edge against every static edge; and against the other
 //!    swept triangles (vertex–triangle and edge–edge, when something moves). Pairs sharing
 //!    a vertex are skipped — as are pairs that touch by construction: a vertex born at an
