@@ -199,7 +199,8 @@ impl std::fmt::Display for MaterialLoss {
         let c = &self.volume;
         if c.relative_change > c.tolerance {
             parts.push(format!(
-                "total volume {:.6} against {:.6} for the union of the input's materials                  ({:+.2} %, tolerance {:.2} %)",
+                "total volume {:.6} against {:.6} for the union of the input's materials \
+                 ({:+.2} %, tolerance {:.2} %)",
                 c.output,
                 c.reference,
                 100.0 * (c.output - c.reference) / c.reference.abs().max(f64::MIN_POSITIVE),

@@ -20,12 +20,13 @@
 //!    the kept triangles that move, the added triangles that move, and (for edge collapses
 //!    and vertex snaps) the deleted fan of the vertex that merges away. Each swept
 //!    triangle is tested against the static rest of the mesh (the live triangles the edit
-//!    neither deletes nor moves): every static vertex against the moving triangle, every moving vertex against every
-//!    static triangle, every moving edge against every static edge; and against the other
-//!    swept triangles (vertex–triangle and edge–edge, when something moves). Pairs sharing
-//!    a vertex are skipped — as are pairs that touch by construction: a vertex born at an
-//!    existing vertex (separation, pinching) counts as that vertex, a vertex deleted onto a
-//!    survivor (collapse, snap) counts as the survivor.
+//!    neither deletes nor moves): every static vertex against the moving triangle, every
+//!    moving vertex against every static triangle, every moving edge against every static
+//!    edge; and against the other swept triangles (vertex–triangle and edge–edge, when
+//!    something moves). Pairs sharing a vertex are skipped — as are pairs that touch by
+//!    construction: a vertex born at an existing vertex (separation, pinching) counts as
+//!    that vertex, a vertex deleted onto a survivor (collapse, snap) counts as the
+//!    survivor.
 //! 3. **Tunnelling** (Los Topos §5): a swept triangle with one moving corner sweeps a
 //!    tetrahedron; no vertex of the static rest and no vertex of the edit (at its end
 //!    position) other than the triangle's own may lie strictly inside it (exact
