@@ -114,6 +114,26 @@ fn fix_exits_1_naming_a_lost_material_and_allow_loss_warns() {
     assert_eq!(volumes[2]["after"].as_f64(), Some(0.0));
     assert!((volumes[0]["before"].as_f64().unwrap() - 1.0).abs() < 1e-9);
     assert!(report["volume_check"]["reference"].as_f64().unwrap() > 1.7);
+    // The improvement's own report: its committed edits are the report's count.
+    let improvement = &report["improvement"];
+    let done = |op: &str| improvement[op]["done"].as_u64().expect("counts");
+    let edits = done("split") + done("collapse") + done("flip") + done("smooth");
+    let edits = edits + improvement["separations"].as_u64().unwrap();
+    let edits = edits + improvement["pinched"].as_u64().unwrap();
+    assert_eq!(report["improve_edits"].as_u64(), Some(edits));
+    assert!(improvement["vetoes"].is_object());
+    // The wall time, not more than the stages (the reference overlaps improvement).
+    let seconds = report["seconds"].as_f64().unwrap();
+    let stages: f64 = report["stages"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["seconds"].as_f64().unwrap())
+        .sum();
+    assert!(
+        seconds > 0.0 && seconds <= stages + 0.05,
+        "{seconds} vs {stages}"
+    );
     assert!(d.join("out.ply").exists());
 }
 
@@ -130,6 +150,7 @@ fn fix_returns_a_clean_coarse_cube_unchanged() {
     let record: Value = serde_json::from_slice(&out.stdout).expect("JSON record");
     assert_eq!(record["report"]["clean_input"], Value::Bool(true));
     assert_eq!(record["report"]["triangles_out"].as_u64(), Some(12));
+    assert!(record["report"]["improvement"].is_null());
     let back = mesh_core::io::read_mesh(&d.join("out.ply")).expect("read");
     assert_eq!(back.to_raw(), m.to_raw());
 }

@@ -32,7 +32,7 @@
 use std::time::Instant;
 
 use glam::IVec3;
-use mesh_core::remesh::VertexAttributes;
+use mesh_core::remesh::{ImproveReport, VertexAttributes};
 use mesh_core::validate::{Listed, ValidateOptions, ValidationReport, any_intersection, validate};
 use mesh_core::{Label, LabelVolume, LabeledMesh, MaterialCensus, StageTiming, TriId};
 
@@ -138,6 +138,9 @@ pub struct FixReport {
     pub subcell_pairs: usize,
     /// Edits of the local improvement.
     pub improve_edits: usize,
+    /// What the improvement did, operation by operation (refusals and the guard's vetoes
+    /// per kind included); `None` when it did not run.
+    pub improvement: Option<ImproveReport>,
     /// Per material (label ≠ 0): the input's divergence-theorem volume (on an overlapping
     /// input, overlaps count once per material covering them) and the output's volume.
     pub volumes: Vec<LabelVolume>,
@@ -336,7 +339,7 @@ pub fn fix_with(mesh: &LabeledMesh, options: &FixOptions) -> Result<FixOutcome, 
     // The reference reads only the input, and improvement is mostly serial: measured
     // beside it, on the core improvement leaves idle, the loss check costs next to no wall
     // time (0.2 s of about 2 s on the README's six copies when it ran on its own).
-    let (reference, improve_edits) = rayon::join(
+    let (reference, improvement) = rayon::join(
         || {
             let start = Instant::now();
             (union_volume(mesh), start.elapsed())
@@ -354,7 +357,10 @@ pub fn fix_with(mesh: &LabeledMesh, options: &FixOptions) -> Result<FixOutcome, 
     );
     let (reference, reference_time) = reference;
     timings.add_overlapped("reference", reference_time);
-    let improve_edits = improve_edits?;
+    let improvement = improvement?;
+    let improve_edits = improvement.as_ref().map_or(0, |r| {
+        r.split.done + r.collapse.done + r.flip.done + r.smooth.done + r.separations + r.pinched
+    });
     let changed_input: Vec<TriId> = mesh
         .triangles()
         .filter(|&t| !is_same_triangle(mesh, &out, t))
@@ -433,6 +439,7 @@ pub fn fix_with(mesh: &LabeledMesh, options: &FixOptions) -> Result<FixOutcome, 
         subcell_rounds: stats.subcell_rounds,
         subcell_pairs: stats.subcell_pairs,
         improve_edits,
+        improvement,
         volumes,
         vanished: vanished.iter().map(|v| v.label).collect(),
         volume_check,
@@ -449,7 +456,7 @@ pub fn fix_with(mesh: &LabeledMesh, options: &FixOptions) -> Result<FixOutcome, 
 }
 
 /// Improves the rebuilt mesh `out` of a [`fix_with`] (when [`GridParams::improve`] asks
-/// for it); returns the number of edits.
+/// for it).
 fn improve_repaired(
     out: &mut LabeledMesh,
     params: &GridParams,
@@ -457,9 +464,9 @@ fn improve_repaired(
     created: &[TriId],
     deadline: Option<Instant>,
     timings: &mut Timings,
-) -> Result<usize, FixError> {
+) -> Result<Option<ImproveReport>, FixError> {
     let Some(ip) = &params.improve else {
-        return Ok(0);
+        return Ok(None);
     };
     let r = timings.time("improve", || {
         improve_mesh(
@@ -473,9 +480,7 @@ fn improve_repaired(
         )
     });
     timings.check_budget(params.time_budget, "improve")?;
-    Ok(r.map_or(0, |r| {
-        r.split.done + r.collapse.done + r.flip.done + r.smooth.done + r.separations + r.pinched
-    }))
+    Ok(r)
 }
 
 /// `|output − reference| / |reference|`, 0 when both vanish, infinite when only the
@@ -519,6 +524,7 @@ fn clean_outcome(
         subcell_rounds: 0,
         subcell_pairs: 0,
         improve_edits: 0,
+        improvement: None,
         volumes: census.volumes_to(&census),
         vanished: Vec::new(),
         volume_check: VolumeCheck {

@@ -110,11 +110,13 @@ Examples:
 
 --json prints a record (schema surftrack.fix/1): input, output, valid, peak_rss_mib, and
 the report:
-stages [{stage, seconds}], cell_size, triangles_in, triangles_out, untouched_fraction,
-flawed_cells, safety_rounds, subcell_rounds, subcell_pairs, improve_edits, validation,
-cell_size_choice {cell_size, rule, thinnest, reason}, clean_input, volumes [{label,
-before, after}], vanished, volume_check {reference, method, spacing, output,
-relative_change, tolerance}, warnings.";
+stages [{stage, seconds}] (`reference` runs beside `improve`), seconds (the call's wall
+time), cell_size, triangles_in, triangles_out, untouched_fraction, flawed_cells,
+safety_rounds, subcell_rounds, subcell_pairs, improve_edits, improvement (per operation:
+done, refused, vetoed; collapse refusals and guard vetoes per kind; null when improvement
+did not run), validation, cell_size_choice {cell_size, rule, thinnest, reason},
+clean_input, volumes [{label, before, after}], vanished, volume_check {reference, method,
+spacing, output, relative_change, tolerance}, warnings.";
 
 /// Arguments of `surftrack fix`.
 #[derive(Debug, Args)]
