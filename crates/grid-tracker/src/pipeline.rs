@@ -540,11 +540,16 @@ impl LocalGuard<'_> {
     fn editable(&self, t: TriId) -> bool {
         self.editable.get(t.idx()).copied().unwrap_or(false)
     }
+
+    /// A triangle at `v` outside the region, if any: moving or removing `v` would deform it.
+    fn fenced(&self, mesh: &LabeledMesh, v: VertexId) -> Option<TriId> {
+        mesh.vertex_triangles(v).find(|&t| !self.editable(t))
+    }
 }
 
 impl EditGuard for LocalGuard<'_> {
     fn check_vertex(&mut self, mesh: &LabeledMesh, v: VertexId) -> Result<(), Veto> {
-        match mesh.vertex_triangles(v).find(|&t| !self.editable(t)) {
+        match self.fenced(mesh, v) {
             Some(tri) => Err(Veto::OutsideRegion { tri }),
             None => self.inner.check_vertex(mesh, v),
         }
@@ -555,7 +560,7 @@ impl EditGuard for LocalGuard<'_> {
             return Err(Veto::OutsideRegion { tri });
         }
         for m in &edit.moves {
-            if let Some(tri) = mesh.vertex_triangles(m.vertex).find(|&t| !self.editable(t)) {
+            if let Some(tri) = self.fenced(mesh, m.vertex) {
                 return Err(Veto::OutsideRegion { tri });
             }
         }
@@ -566,11 +571,7 @@ impl EditGuard for LocalGuard<'_> {
     /// a batch inside it goes to the inner guard whole.
     fn offending_moves(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Option<Vec<usize>> {
         let outside: Vec<usize> = (0..edit.moves.len())
-            .filter(|&i| {
-                !mesh
-                    .vertex_triangles(edit.moves[i].vertex)
-                    .all(|t| self.editable(t))
-            })
+            .filter(|&i| self.fenced(mesh, edit.moves[i].vertex).is_some())
             .collect();
         if outside.is_empty() {
             self.inner.offending_moves(mesh, edit)

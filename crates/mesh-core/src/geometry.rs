@@ -244,8 +244,6 @@ struct QualityAcc {
     max_angle: f64,
     min_edge: f64,
     max_edge: f64,
-    /// Filled in by [`quality`] after the parallel fold (see there).
-    edge_sum: f64,
     min_area: f64,
     max_area: f64,
 }
@@ -258,7 +256,6 @@ impl QualityAcc {
         max_angle: f64::NEG_INFINITY,
         min_edge: f64::INFINITY,
         max_edge: f64::NEG_INFINITY,
-        edge_sum: 0.0,
         min_area: f64::INFINITY,
         max_area: f64::NEG_INFINITY,
     };
@@ -294,13 +291,13 @@ impl QualityAcc {
             max_angle: self.max_angle.max(o.max_angle),
             min_edge: self.min_edge.min(o.min_edge),
             max_edge: self.max_edge.max(o.max_edge),
-            edge_sum: 0.0,
             min_area: self.min_area.min(o.min_area),
             max_area: self.max_area.max(o.max_area),
         }
     }
 
-    fn finish(self) -> QualityStats {
+    /// The figures, with `edge_sum` the sum of the counted triangles' edge lengths.
+    fn finish(self, edge_sum: f64) -> QualityStats {
         if self.triangles == 0 {
             return QualityStats {
                 triangles: 0,
@@ -321,7 +318,7 @@ impl QualityAcc {
             max_angle_deg: self.max_angle.to_degrees(),
             min_edge: self.min_edge,
             max_edge: self.max_edge,
-            mean_edge: self.edge_sum / (3 * self.triangles) as f64,
+            mean_edge: edge_sum / (3 * self.triangles) as f64,
             min_area: self.min_area,
             max_area: self.max_area,
         }
@@ -335,7 +332,7 @@ impl QualityAcc {
 /// thread count.
 pub fn quality(mesh: &LabeledMesh) -> QualityStats {
     let alive = mesh.tri_alive_flags();
-    let mut acc = (0..mesh.triangle_capacity())
+    let acc = (0..mesh.triangle_capacity())
         .into_par_iter()
         .with_min_len(1024)
         .filter(|&t| alive[t])
@@ -344,7 +341,7 @@ pub fn quality(mesh: &LabeledMesh) -> QualityStats {
             |acc, t| acc.add(&mesh.tri_positions(TriId::new(t as u32))),
         )
         .reduce(|| QualityAcc::EMPTY, QualityAcc::merge);
-    acc.edge_sum = ordered_sum(mesh.triangle_capacity(), |t| {
+    let edge_sum = ordered_sum(mesh.triangle_capacity(), |t| {
         if !alive[t] {
             return 0.0;
         }
@@ -355,7 +352,7 @@ pub fn quality(mesh: &LabeledMesh) -> QualityStats {
             0.0
         }
     });
-    acc.finish()
+    acc.finish(edge_sum)
 }
 
 #[cfg(test)]

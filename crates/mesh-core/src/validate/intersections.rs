@@ -117,8 +117,9 @@ pub(super) fn check(mesh: &LabeledMesh, ctx: &EdgeContext, cap: usize) -> Listed
 ///
 /// Why not the full layer 4 ([`super::check_intersections`]): a caller that only asks
 /// whether a mesh is clean (`fix` deciding whether its input needs repair) has no use for
-/// the count and list of every pair, and on a mesh that is not clean — the usual input of a repair — the first pair is found
-/// long before the last: once one is found, every task skips its remaining exact tests.
+/// the count and list of every pair, and on a mesh that is not clean — the usual input of
+/// a repair — the first pair is found long before the last: once one is found, every task
+/// skips its remaining exact tests.
 /// Triangles that layers 1–3 would reject (dead, dangling, degenerate, non-finite) are
 /// left out, so any mesh is safe to ask. The answer does not depend on the thread count.
 pub fn any_intersection(mesh: &LabeledMesh) -> bool {
