@@ -30,6 +30,7 @@ pub mod flows;
 pub mod isolate;
 pub mod options;
 pub mod preservation;
+pub mod quality;
 pub mod record;
 pub mod report;
 pub mod scaling;
