@@ -184,7 +184,10 @@ fn different_label_spheres_get_a_shared_interface_and_a_triple_curve() {
 fn voronoi_foam_under_mean_curvature_flow_performs_t1_and_t2() {
     let mesh = voronoi_foam(16, 3, DVec3::ZERO, DVec3::ONE).unwrap();
     let mut t = tracker(mesh, CollisionParams::default());
-    let reports = run(t.as_mut(), 6, |m, _| umbrella_flow(m, 0.2));
+    // Twelve steps: the first T2 comes once the smallest cell has shrunk to a few
+    // triangles, which depends on how improvement coarsens the cells: within 6 steps
+    // before noise-sized ridges and corners were collapsed, later since (2 T2 in 12).
+    let reports = run(t.as_mut(), 12, |m, _| umbrella_flow(m, 0.2));
     let t1: u64 = reports.iter().map(|r| r.events.t1).sum();
     let t2: u64 = reports.iter().map(|r| r.events.t2).sum();
     assert!(t1 > 0, "no T1 event in the foam: {reports:?}");

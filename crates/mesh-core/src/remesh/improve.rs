@@ -63,6 +63,12 @@ pub struct ImproveParams {
     /// A collapse may not create an edge longer than `collapse_max_edge_factor · ℓ`.
     /// Default 1.35: below `max_edge_factor`, so collapses never feed the next split.
     pub collapse_max_edge_factor: f64,
+    /// Ridges and corners of a patch smaller than `min_feature_factor · ℓ` are noise, not
+    /// shape: a collapse of an edge that short places its ridge and corner endpoints as
+    /// smooth ones (see [`CollapseParams::min_feature_size`]); feature curves are kept at
+    /// every size. Default 0.25: half the shortest edge improvement keeps, so a feature
+    /// the target resolution can carry is never taken for noise.
+    pub min_feature_factor: f64,
     /// Ω, the largest change of any label's volume one flip, collapse, smoothing move or
     /// butterfly split may cause. Default `None`: `0.1·ℓ³` (El Topo §3.5.2).
     pub max_volume_change: Option<f64>,
@@ -124,6 +130,7 @@ impl Default for ImproveParams {
             min_edge_factor: 0.5,
             max_edge_factor: 1.5,
             collapse_max_edge_factor: 1.35,
+            min_feature_factor: 0.25,
             max_volume_change: None,
             max_sweeps: 8,
             split: true,
@@ -850,6 +857,7 @@ impl<'p> Run<'p> {
             features: self.params.features,
             max_volume_change: self.report.max_volume_change,
             max_edge_length: self.params.collapse_max_edge_factor * self.report.target_edge_length,
+            min_feature_size: self.params.min_feature_factor * self.report.target_edge_length,
             min_normal_cos: self.params.min_normal_cos,
             conserve_volume: self.params.conserve_volume,
             ..CollapseParams::default()
