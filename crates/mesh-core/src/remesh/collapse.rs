@@ -11,7 +11,9 @@
 //! a convex patch); a feature vertex (ridge, corner, curve) keeps its place
 //! against a smooth one; two ridge vertices merge at the midpoint only along their ridge;
 //! two vertices of a feature curve merge only along a curve edge, onto one endpoint, so
-//! the curve keeps its vertices exactly. Everything else is refused. In the
+//! the curve keeps its vertices exactly. Everything else is refused. On an edge shorter
+//! than [`CollapseParams::min_feature_size`], ridges and corners count as smooth: a
+//! geometric feature that small is noise (feature curves are kept at every size). In the
 //! [`CollapsePlacement::Midpoint`] mode (the collision tracker's T1/T2-initiating
 //! collapse) the endpoints always meet at the midpoint and their kinds are not asked.
 //!
