@@ -358,9 +358,7 @@ pub fn fix_with(mesh: &LabeledMesh, options: &FixOptions) -> Result<FixOutcome, 
     let (reference, reference_time) = reference;
     timings.add_overlapped("reference", reference_time);
     let improvement = improvement?;
-    let improve_edits = improvement.as_ref().map_or(0, |r| {
-        r.split.done + r.collapse.done + r.flip.done + r.smooth.done + r.separations + r.pinched
-    });
+    let improve_edits = improvement.as_ref().map_or(0, ImproveReport::edits);
     let changed_input: Vec<TriId> = mesh
         .triangles()
         .filter(|&t| !is_same_triangle(mesh, &out, t))

@@ -222,12 +222,7 @@ impl GridTracker {
                 )
             });
             if let Some(r) = report {
-                edits = (r.split.done
-                    + r.collapse.done
-                    + r.flip.done
-                    + r.smooth.done
-                    + r.separations
-                    + r.pinched) as u64;
+                edits = r.edits() as u64;
             }
         }
         if self.params.validate_each_step {

@@ -234,6 +234,19 @@ pub struct ImproveReport {
     pub edges_in_range: f64,
 }
 
+impl ImproveReport {
+    /// The edits committed: splits, collapses, flips, smoothing moves, separations and
+    /// pinches (the count a tracker reports as its remeshing edits).
+    pub fn edits(&self) -> usize {
+        self.split.done
+            + self.collapse.done
+            + self.flip.done
+            + self.smooth.done
+            + self.separations
+            + self.pinched
+    }
+}
+
 /// Improves the mesh (see the module doc); T1 separation uses [`AreaDecrease`] as its
 /// strength (the surface-tension choice). Each edit goes through `guard`; `attrs` follow.
 pub fn improve(
