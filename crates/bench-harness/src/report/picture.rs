@@ -76,6 +76,12 @@ pub struct Camera {
 impl Camera {
     /// Frames `bounds` (an empty or non-finite box frames the unit cube).
     pub fn fit(bounds: Aabb) -> Camera {
+        Camera::fit_looking(bounds, VIEW_DIRECTION)
+    }
+
+    /// [`Camera::fit`] seen from `direction` (from the scene towards the camera) instead
+    /// of [`VIEW_DIRECTION`]; a zero, non-finite or vertical direction falls back to it.
+    pub fn fit_looking(bounds: Aabb, direction: DVec3) -> Camera {
         let ok =
             bounds.min.is_finite() && bounds.max.is_finite() && bounds.min.cmple(bounds.max).all();
         let (min, max) = if ok {
@@ -83,7 +89,12 @@ impl Camera {
         } else {
             (DVec3::splat(-1.0), DVec3::splat(1.0))
         };
-        let towards = VIEW_DIRECTION.normalize();
+        let towards = direction.normalize_or_zero();
+        let towards = if towards.is_finite() && towards.cross(DVec3::Y).length() > 1e-6 {
+            towards
+        } else {
+            VIEW_DIRECTION.normalize()
+        };
         let right = DVec3::Y.cross(towards).normalize();
         let up = towards.cross(right);
         Camera {
@@ -93,6 +104,12 @@ impl Camera {
             up,
             towards,
         }
+    }
+
+    /// Whether `p` lies in the half [`render`]'s cut-away drops.
+    fn beyond_cut(&self, p: DVec3) -> bool {
+        let axis = self.towards.abs().max_position();
+        (p[axis] - self.centre[axis]) * self.towards[axis].signum() > 0.0
     }
 
     /// Pixel coordinates and depth (larger: nearer the camera) of `p`.
@@ -112,9 +129,9 @@ pub fn bounds_of<'a>(meshes: impl IntoIterator<Item = &'a LabeledMesh>) -> Aabb 
     })
 }
 
-/// Renders `mesh` seen by `camera`; with `cut_away`, the triangles above the plane
-/// z = centre (the half nearer the camera, whose view direction has +z) are left out —
-/// the page's default cut plane too.
+/// Renders `mesh` seen by `camera`; with `cut_away`, the half nearer the camera is left
+/// out: the triangles beyond the plane through the centre across the view direction's
+/// dominant axis (z = centre for [`VIEW_DIRECTION`] — the page's default cut plane too).
 pub fn render(
     mesh: &LabeledMesh,
     camera: &Camera,
@@ -139,7 +156,7 @@ pub fn render(
     for (i, t) in mesh.triangles().enumerate() {
         let p = mesh.tri_positions(t);
         let centroid = (p[0] + p[1] + p[2]) / 3.0;
-        if !centroid.is_finite() || (cut_away && centroid.z > camera.centre.z) {
+        if !centroid.is_finite() || (cut_away && camera.beyond_cut(centroid)) {
             continue;
         }
         let corners = p.map(|q| camera.project(q, width, height));
