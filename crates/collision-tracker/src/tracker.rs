@@ -9,7 +9,7 @@
 
 use glam::DVec3;
 use mesh_core::remesh::improve::mean_edge_length;
-use mesh_core::remesh::{ImproveParams, SeparationParams};
+use mesh_core::remesh::{ImproveParams, SeparationParams, ThinRegionParams};
 use mesh_core::validate::{ValidateOptions, validate};
 use mesh_core::{LabeledMesh, RegionCensus, StepReport, SurfaceTracker, TrackError, VertexId};
 
@@ -126,6 +126,10 @@ fn configure(params: &CollisionParams, l: f64) -> StepConfig {
         // displacement as the merge's attributes): at least 1 % of the merge distance per
         // step, far above the rounding of a rigid motion.
         m.min_approach = Some(0.01 * m.merge_distance);
+        m.thin_regions = Some(ThinRegionParams {
+            max_volume: params.max_volume_change.unwrap_or(0.1 * l * l * l),
+            max_mean_thickness: REGION_THICKNESS_FACTOR * l,
+        });
         m
     });
     if let Some(m) = &merge {
@@ -177,9 +181,7 @@ fn configure(params: &CollisionParams, l: f64) -> StepConfig {
         collision_safety: params.collision_safety,
         // Far below the repulsion distance (10⁻³ ℓ), far above rounding.
         min_separation: 1e-6 * l,
-        // A tenth of ℓ: slivers between snapped sheets are a few merge distances (0.02 ℓ)
-        // thick; a ball this thin (radius 0.3 ℓ) is below what edges of length ℓ resolve.
-        region_thickness: 0.1 * l,
+        region_thickness: REGION_THICKNESS_FACTOR * l,
         relax: RelaxOptions {
             passes: if params.improve {
                 params.relax_passes
@@ -216,6 +218,12 @@ impl SurfaceTracker for CollisionTracker {
         Ok(step.report)
     }
 }
+
+/// Regions thinner than this × ℓ (volume / area) are not counted as regions by the step's
+/// events and are closed by the merge when they hold at most Ω: slivers between snapped
+/// sheets are a few merge distances (0.02 ℓ) thick; a ball this thin (radius 0.3 ℓ) is
+/// below what edges of length ℓ resolve.
+const REGION_THICKNESS_FACTOR: f64 = 0.1;
 
 /// Smallest ratio of the target edge length to the largest coordinate magnitude. Below
 /// it the separations the step keeps (10⁻⁶ ℓ, see `min_separation`) come within a few

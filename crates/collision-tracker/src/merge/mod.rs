@@ -19,7 +19,17 @@
 //!                         labels (a new interface)
 //!     pinch (optional)    duplicate singular vertices
 //!     stop when a round snaps nothing
+//! remove_thin_regions     pockets the snaps trapped between the joined sheets absorbed
+//!                         into their main neighbour (optional)
 //! ```
+//!
+//! **Why pockets are closed here.** Snapping joins two sheets pair by pair, and what lies
+//! between joined pairs is a closed pocket of the surrounding material a few thousandths of
+//! ℓ thick. Its two sides are neighbours along the mesh, so later rounds take them for one
+//! sheet (the surface-reach test), and its tiny edges block every collapse: left alone,
+//! pockets pile up in the wall (≈ 100 after 40 steps of two spheres pressed together) as
+//! crumples that remeshing cannot smooth. Closing a pocket is the T2 rule for a region of
+//! (almost) zero volume, bounded by Ω like every remeshing edit.
 //!
 //! Every split, snap and removal is one atomic edit through the caller's guard (pass a
 //! [`crate::CollisionGuard`] to keep the mesh intersection-free), so a refused or vetoed
@@ -36,9 +46,9 @@ use std::collections::{BTreeMap, BTreeSet};
 
 use glam::DVec3;
 use mesh_core::remesh::{
-    DegenerateReport, EditError, EditGuard, SnapError, SnapParams, SplitRecord, VertexAttributes,
-    pinch_singular_vertices, remove_degenerate, snap_vertices, split_edge_at, split_triangle_at,
-    undo_split,
+    DegenerateReport, EditError, EditGuard, SnapError, SnapParams, SplitRecord, ThinRegionParams,
+    ThinRegionReport, VertexAttributes, pinch_singular_vertices, remove_degenerate,
+    remove_thin_regions, snap_vertices, split_edge_at, split_triangle_at, undo_split,
 };
 use mesh_core::{Label, LabeledMesh, MeshError, TriId, VertexId};
 
@@ -74,6 +84,12 @@ pub struct MergeOptions {
     /// distance; surfaces that are merely close — neighbours across a sliver, a notch
     /// moving rigidly — are left alone. Default `None`: every proximate pair merges.
     pub min_approach: Option<f64>,
+    /// Pockets closed after the rounds (see the module doc): thin regions with a corner at
+    /// a vertex snapped in this call or listed in its `snapped` on entry, so regions that
+    /// thin out elsewhere (a shrinking foam cell) are left to T2. `None` leaves them. Default
+    /// `None` here; the collision tracker closes regions thinner than a tenth of ℓ
+    /// (the thickness below which it does not count a region) of at most Ω.
+    pub thin_regions: Option<ThinRegionParams>,
 }
 
 impl MergeOptions {
@@ -86,6 +102,7 @@ impl MergeOptions {
             pinch: false,
             surface_reach_factor: 2.0,
             min_approach: None,
+            thin_regions: None,
         }
     }
 
@@ -96,7 +113,7 @@ impl MergeOptions {
 }
 
 /// What [`snap_merge`] did.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct MergeReport {
     /// Vertex pairs snapped together.
     pub snaps: usize,
@@ -131,6 +148,8 @@ pub struct MergeReport {
     pub degenerate: DegenerateReport,
     /// Singular vertices pinched.
     pub pinched: usize,
+    /// Pockets closed (see [`MergeOptions::thin_regions`]).
+    pub thin: ThinRegionReport,
 }
 
 impl MergeReport {
@@ -143,6 +162,7 @@ impl MergeReport {
                 + self.degenerate.pairs_removed
                 > 0
             || self.pinched > 0
+            || self.thin.absorbed > 0
     }
 }
 
@@ -264,6 +284,9 @@ pub fn snap_merge_from(
         if report.snaps == snaps_before {
             break;
         }
+    }
+    if let Some(thin) = &options.thin_regions {
+        report.thin = remove_thin_regions(mesh, attrs, guard, thin, Some(snapped));
     }
     let shells_after = bounded_shells(mesh);
     report.merges = shells_before

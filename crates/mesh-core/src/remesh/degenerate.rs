@@ -14,12 +14,25 @@
 //! Triangles with a repeated vertex are deleted outright. Every removal is one [`Edit`]
 //! through [`apply_edit`], so a guard may veto it; vertices left without triangles are
 //! removed by the same edit.
+//!
+//! **Thin regions** ([`remove_thin_regions`]) are the same process one step earlier: a
+//! bounded region whose volume is at most Ω and whose mean thickness is a small fraction
+//! of an edge has not collapsed to coincident triangles, but it is no region either. Snap
+//! merging makes them: it joins two sheets pair by pair, and the last gaps between the
+//! joined pairs are closed pockets of the surrounding material, a few thousandths of an
+//! edge thick, whose sides are neighbours along the mesh (so the merge takes them for
+//! one sheet) and whose tiny edges block every collapse. Such a region is absorbed into
+//! the neighbour it shares most of its boundary with, `Y`: its sides facing `Y` are
+//! deleted (the two regions become one) and its other sides relabelled to face `Y` — what
+//! the coincident-pair rule does when the pair's volume is exactly zero.
 
 use rayon::prelude::*;
 
 use crate::corner::Side;
 use crate::ids::{CornerId, Label, TriId, VertexId};
 use crate::mesh::LabeledMesh;
+
+use crate::broadphase::Aabb;
 
 use super::attributes::VertexAttributes;
 use super::edit::{Edit, EditError, VertexRef, apply_edit};
@@ -153,6 +166,175 @@ pub fn remove_degenerate_in(
         }
     }
     report
+}
+
+/// Which regions [`remove_thin_regions`] absorbs.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct ThinRegionParams {
+    /// Largest volume of a region absorbed (Ω: the volume one edit may move between
+    /// labels, as for collapses).
+    pub max_volume: f64,
+    /// Largest mean thickness, `volume / area` of the region's boundary (half the gap of a
+    /// pocket between two sheets).
+    pub max_mean_thickness: f64,
+}
+
+/// What [`remove_thin_regions`] did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct ThinRegionReport {
+    /// Regions absorbed into a neighbour.
+    pub absorbed: usize,
+    /// Their summed volume (moved from their label to the neighbour's).
+    pub volume: f64,
+    /// Thin regions left alone: a region of the same label may lie inside (a cavity the
+    /// shell alone cannot tell from the region's own), or the edit was refused or vetoed.
+    pub refused: usize,
+}
+
+/// Bound on the passes of [`remove_thin_regions`]: a pass absorbs every thin region whose
+/// triangles the earlier absorptions of the pass left alone; neighbours of an absorbed
+/// region are looked at again in the next pass, with their new shape.
+const MAX_THIN_PASSES: usize = 4;
+
+/// Absorbs every thin bounded region into its main neighbour (see the module doc); with
+/// `only_at`, only the regions with a corner at one of those vertices (a merge closes the
+/// pockets at its own snaps and leaves shrinking regions elsewhere to T2).
+pub fn remove_thin_regions(
+    mesh: &mut LabeledMesh,
+    attrs: &mut VertexAttributes,
+    guard: &mut dyn EditGuard,
+    params: &ThinRegionParams,
+    only_at: Option<&[VertexId]>,
+) -> ThinRegionReport {
+    let mut report = ThinRegionReport::default();
+    let marked = only_at.map(|vertices| {
+        let mut flags = vec![false; mesh.vertex_capacity()];
+        for v in vertices {
+            if let Some(f) = flags.get_mut(v.idx()) {
+                *f = true;
+            }
+        }
+        flags
+    });
+    let at_marked = |mesh: &LabeledMesh, t: TriId| match &marked {
+        None => true,
+        Some(flags) => mesh
+            .tri(t)
+            .iter()
+            .any(|v| flags.get(v.idx()).copied().unwrap_or(false)),
+    };
+    let mut edit = Edit::default();
+    for _ in 0..MAX_THIN_PASSES {
+        let regions = mesh.regions();
+        let thin: Vec<usize> = (0..regions.shells.len())
+            .filter(|&s| {
+                let shell = &regions.shells[s];
+                shell.closed
+                    && shell.consistent
+                    && shell.volume > 0.0
+                    && shell.volume <= params.max_volume
+                    && shell.volume <= params.max_mean_thickness * shell.area
+            })
+            .collect();
+        if thin.is_empty() {
+            break;
+        }
+        // Sides of each shell, and the box of every shell (for the cavity test).
+        let mut sides: Vec<Vec<(TriId, Side)>> = vec![Vec::new(); regions.shells.len()];
+        let mut boxes = vec![Aabb::EMPTY; regions.shells.len()];
+        let mut is_thin = vec![false; regions.shells.len()];
+        for &s in &thin {
+            is_thin[s] = true;
+        }
+        for t in mesh.triangles() {
+            for side in [Side::Front, Side::Back] {
+                let Some(s) = regions.shell_of(t, side) else {
+                    continue;
+                };
+                for p in mesh.tri_positions(t) {
+                    boxes[s] = boxes[s].including(p);
+                }
+                if is_thin[s] {
+                    sides[s].push((t, side));
+                }
+            }
+        }
+        let mut touched = vec![false; mesh.triangle_capacity()];
+        let mut changed = false;
+        for &s in &thin {
+            let shell = &regions.shells[s];
+            let own = &sides[s];
+            if own.iter().any(|&(t, _)| touched[t.idx()]) {
+                continue; // a neighbour was absorbed: next pass
+            }
+            if !own.iter().any(|&(t, _)| at_marked(mesh, t)) {
+                continue;
+            }
+            // A shell of the same label facing inward (negative volume) inside this one's
+            // box may be a cavity of this very region: relabelling the outer shell alone
+            // would leave the cavity's sides with the old label.
+            let cavity = regions.shells.iter().zip(&boxes).any(|(other, b)| {
+                other.label == shell.label
+                    && other.volume < 0.0
+                    && b.min.cmpge(boxes[s].min).all()
+                    && b.max.cmple(boxes[s].max).all()
+            });
+            let Some(into) = main_neighbour(mesh, own).filter(|_| !cavity) else {
+                report.refused += 1;
+                continue;
+            };
+            edit.clear();
+            for &(t, side) in own {
+                let mut labels = mesh.labels(t);
+                edit.remove_tris.push(t);
+                if labels[side.flip().index()] != into {
+                    labels[side.index()] = into;
+                    edit.add_tris
+                        .push((mesh.tri(t).map(VertexRef::Old), labels));
+                }
+            }
+            remove_orphans(mesh, &mut edit);
+            match apply_edit(mesh, attrs, guard, &edit) {
+                Ok(_) => {
+                    for &(t, _) in own {
+                        touched[t.idx()] = true;
+                    }
+                    touched.resize(mesh.triangle_capacity(), false);
+                    report.absorbed += 1;
+                    report.volume += shell.volume;
+                    changed = true;
+                }
+                Err(_) => report.refused += 1,
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    report
+}
+
+/// The label across the given sides that covers the most area (ties: the smaller
+/// label); `None` for a shell whose triangles have it on both sides.
+fn main_neighbour(mesh: &LabeledMesh, sides: &[(TriId, Side)]) -> Option<Label> {
+    let mut areas: Vec<(Label, f64)> = Vec::new();
+    for &(t, side) in sides {
+        let labels = mesh.labels(t);
+        if labels[0] == labels[1] {
+            return None;
+        }
+        let [a, b, c] = mesh.tri_positions(t);
+        let area = 0.5 * (b - a).cross(c - a).length();
+        let across = labels[side.flip().index()];
+        match areas.iter_mut().find(|(l, _)| *l == across) {
+            Some(entry) => entry.1 += area,
+            None => areas.push((across, area)),
+        }
+    }
+    areas
+        .into_iter()
+        .max_by(|x, y| x.1.total_cmp(&y.1).then(y.0.cmp(&x.0)))
+        .map(|(l, _)| l)
 }
 
 /// True when another triangle on `t`'s edge `v0 v1` has `t`'s third vertex — necessary
@@ -305,6 +487,124 @@ mod tests {
         // No shared label on facing sides: not a collapsed region.
         let m = mesh_of(&[[0, 1, 2], [0, 1, 2]], &[[1, 2], [3, 4]]);
         assert_eq!(classify(&m, TriId::new(0), TriId::new(1)), None);
+    }
+
+    /// Tetrahedron 0123 (label 1 inside, 0 outside) with, glued on its face 012, a second
+    /// tetrahedron 0124 of label 2 whose apex lies `height` below the face's centre.
+    fn glued_tetrahedra(height: f64) -> LabeledMesh {
+        let p = vec![
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(0.0, 1.0, 0.0),
+            DVec3::new(0.0, 0.0, 1.0),
+            DVec3::new(1.0 / 3.0, 1.0 / 3.0, -height),
+        ];
+        // The shared face 012 first (its normal points to −z, into label 2), then the
+        // outer faces of each tetrahedron: front faces away from the tetrahedron's centre.
+        let mut tris = vec![[0u32, 2, 1]];
+        let mut labels = vec![[2u32, 1]];
+        for (faces, inside, corners) in [
+            ([[0, 1, 3], [1, 2, 3], [0, 3, 2]], 1, [0usize, 1, 2, 3]),
+            ([[0, 1, 4], [1, 2, 4], [2, 0, 4]], 2, [0, 1, 2, 4]),
+        ] {
+            let centre = corners.iter().map(|&i| p[i]).sum::<DVec3>() / 4.0;
+            for f in faces {
+                let [a, b, c] = f.map(|i: u32| p[i as usize]);
+                let outward = (b - a).cross(c - a).dot(a - centre) > 0.0;
+                tris.push(f);
+                labels.push(if outward { [0, inside] } else { [inside, 0] });
+            }
+        }
+        LabeledMesh::from_raw(p, &tris, &labels).unwrap()
+    }
+
+    fn label_volume(m: &LabeledMesh, label: u32) -> f64 {
+        m.regions()
+            .bounded()
+            .filter(|s| s.label == Label::new(label))
+            .map(|s| s.volume)
+            .sum()
+    }
+
+    #[test]
+    fn a_thin_region_is_absorbed_into_its_main_neighbour() {
+        let params = ThinRegionParams {
+            max_volume: 0.01,
+            max_mean_thickness: 0.01,
+        };
+        let mut m = glued_tetrahedra(1e-4);
+        assert!(crate::validate::validate(&m, &Default::default()).is_valid());
+        let thin = label_volume(&m, 2);
+        assert!(thin > 0.0 && thin < 1e-4, "{thin}");
+        let before_1 = label_volume(&m, 1);
+        let r = remove_thin_regions(
+            &mut m,
+            &mut VertexAttributes::none(),
+            &mut NoGuard,
+            &params,
+            None,
+        );
+        assert_eq!(r.absorbed, 1, "{r:?}");
+        assert!((r.volume - thin).abs() < 1e-15);
+        // Label 2 faced the outside on most of its area: its outer faces go, the face it
+        // shared with label 1 now faces the outside, and the apex vertex is gone.
+        assert_eq!(m.num_triangles(), 4);
+        assert_eq!(m.num_vertices(), 4);
+        assert!(crate::validate::validate(&m, &Default::default()).is_valid());
+        assert_eq!(label_volume(&m, 2), 0.0);
+        assert!((label_volume(&m, 1) - before_1).abs() < 1e-15);
+    }
+
+    #[test]
+    fn regions_thicker_or_larger_than_the_bounds_stay() {
+        let mut m = glued_tetrahedra(1e-4);
+        let thin = label_volume(&m, 2);
+        for params in [
+            // Thin, but more volume than one edit may move.
+            ThinRegionParams {
+                max_volume: 0.5 * thin,
+                max_mean_thickness: 1.0,
+            },
+            // Small, but thicker than asked.
+            ThinRegionParams {
+                max_volume: 1.0,
+                max_mean_thickness: 1e-6,
+            },
+        ] {
+            let r = remove_thin_regions(
+                &mut m,
+                &mut VertexAttributes::none(),
+                &mut NoGuard,
+                &params,
+                None,
+            );
+            assert_eq!(r, ThinRegionReport::default());
+            assert_eq!(m.num_triangles(), 7);
+        }
+        // Thin and small, but no corner at the given vertices (vertex 3 is only on the
+        // thick tetrahedron, which these bounds keep).
+        let params = ThinRegionParams {
+            max_volume: 2.0 * thin,
+            max_mean_thickness: 0.01,
+        };
+        let only = [VertexId::new(3)];
+        let r = remove_thin_regions(
+            &mut m,
+            &mut VertexAttributes::none(),
+            &mut NoGuard,
+            &params,
+            Some(&only),
+        );
+        assert_eq!(r, ThinRegionReport::default());
+        let only = [VertexId::new(4)];
+        let r = remove_thin_regions(
+            &mut m,
+            &mut VertexAttributes::none(),
+            &mut NoGuard,
+            &params,
+            Some(&only),
+        );
+        assert_eq!(r.absorbed, 1);
     }
 
     #[test]

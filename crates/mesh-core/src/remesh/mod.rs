@@ -39,7 +39,10 @@ pub use attributes::{Blend, VertexAttributes};
 pub use collapse::{
     CollapseError, CollapseParams, CollapsePlacement, CollapseRefusal, collapse_edge,
 };
-pub use degenerate::{DegenerateReport, remove_degenerate, remove_degenerate_in};
+pub use degenerate::{
+    DegenerateReport, ThinRegionParams, ThinRegionReport, remove_degenerate, remove_degenerate_in,
+    remove_thin_regions,
+};
 pub use edit::{Applied, Edit, EditError, NewVertex, VertexMove, VertexRef, apply_edit};
 pub use features::{
     FeatureParams, VertexKind, classify_vertex, classify_vertices, max_label_volume_change,
