@@ -395,8 +395,12 @@ fn merge_pair(
                 return Ok(());
             }
             let bary = [-prox.weights[1], -prox.weights[2], -prox.weights[3]];
-            counterpart_on_triangle(mesh, attrs, guard, t, bary, d, &mut splits, report)?
-                .map(|w| (v, w))
+            let plan = plan_on_triangle(mesh, t, bary, d);
+            if would_share_an_edge(mesh, Counterpart::Existing(v), plan) {
+                report.refused += 1;
+                return Ok(());
+            }
+            make(mesh, attrs, guard, plan, &mut splits, report)?.map(|w| (v, w))
         }
         Pair::EdgeEdge([a, b], [p, q]) => {
             let live = [a, b, p, q].iter().all(|&v| mesh.is_vertex_alive(v))
@@ -412,11 +416,17 @@ fn merge_pair(
                 return Ok(());
             }
             let (s, u) = (prox.weights[1], -prox.weights[3]);
-            let first = counterpart_on_edge(mesh, attrs, guard, a, b, s, d, &mut splits, report)?;
+            let plans = [
+                plan_on_edge(mesh, a, b, s, d),
+                plan_on_edge(mesh, p, q, u, d),
+            ];
+            if would_share_an_edge(mesh, plans[0], plans[1]) {
+                report.refused += 1;
+                return Ok(());
+            }
+            let first = make(mesh, attrs, guard, plans[0], &mut splits, report)?;
             let second = match first {
-                Some(_) => {
-                    counterpart_on_edge(mesh, attrs, guard, p, q, u, d, &mut splits, report)?
-                }
+                Some(_) => make(mesh, attrs, guard, plans[1], &mut splits, report)?,
                 None => None,
             };
             first.zip(second)
@@ -455,20 +465,20 @@ fn merge_pair(
     Ok(())
 }
 
-/// A vertex at the closest point of triangle `t` (barycentric `bary`): a corner within `d`,
-/// else a split of an edge within `d`, else a trisection. `None` when refused or vetoed.
-/// A split is recorded in `splits`.
-#[allow(clippy::too_many_arguments)]
-fn counterpart_on_triangle(
-    mesh: &mut LabeledMesh,
-    attrs: &mut VertexAttributes,
-    guard: &mut dyn EditGuard,
-    t: TriId,
-    bary: [f64; 3],
-    d: f64,
-    splits: &mut Vec<(VertexId, SplitRecord)>,
-    report: &mut MergeReport,
-) -> Result<Option<VertexId>, MergeError> {
+/// Where one side of a pair gets its vertex to snap: an existing vertex, or one made by
+/// splitting an edge or a triangle at the closest point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Counterpart {
+    Existing(VertexId),
+    /// Edge `{a, b}` split at parameter `s` from `a`.
+    OnEdge(VertexId, VertexId, f64),
+    /// Triangle trisected at barycentric coordinates.
+    OnTriangle(TriId, [f64; 3]),
+}
+
+/// The counterpart at the closest point of triangle `t` (barycentric `bary`): a corner
+/// within `d`, else a split of an edge within `d`, else a trisection.
+fn plan_on_triangle(mesh: &LabeledMesh, t: TriId, bary: [f64; 3], d: f64) -> Counterpart {
     let verts = mesh.tri(t);
     let x = mesh.tri_positions(t);
     let point = x[0] * bary[0] + x[1] * bary[1] + x[2] * bary[2];
@@ -477,7 +487,7 @@ fn counterpart_on_triangle(
         .filter(|&k| (x[k] - point).length() <= d)
         .min_by(|&i, &j| (x[i] - point).length().total_cmp(&(x[j] - point).length()))
     {
-        return Ok(Some(verts[k]));
+        return Counterpart::Existing(verts[k]);
     }
     // Nearest edge within d: split it at the projection of the point.
     let on_edge = |i: usize, j: usize| {
@@ -494,34 +504,71 @@ fn counterpart_on_triangle(
         .filter(|e| e.3 <= d)
         .min_by(|a, b| a.3.total_cmp(&b.3))
     {
-        return split_edge(mesh, attrs, guard, verts[i], verts[j], s, splits, report);
+        return Counterpart::OnEdge(verts[i], verts[j], s);
     }
-    let record = SplitRecord::triangle(mesh, t);
-    let split = split_triangle_at(mesh, attrs, guard, t, bary);
-    keep_split(split, record, |r| &mut r.face_splits, splits, report)
+    Counterpart::OnTriangle(t, bary)
 }
 
-/// A vertex at parameter `s` of edge `{a, b}`: an end within `d`, else a split there.
-#[allow(clippy::too_many_arguments)]
-fn counterpart_on_edge(
+/// The counterpart at parameter `s` of edge `{a, b}`: an end within `d`, else a split.
+fn plan_on_edge(mesh: &LabeledMesh, a: VertexId, b: VertexId, s: f64, d: f64) -> Counterpart {
+    let len = (mesh.position(b) - mesh.position(a)).length();
+    if s * len <= d {
+        Counterpart::Existing(a)
+    } else if (1.0 - s) * len <= d {
+        Counterpart::Existing(b)
+    } else {
+        Counterpart::OnEdge(a, b, s)
+    }
+}
+
+/// True when the two counterparts would be one vertex or the ends of one edge, so the
+/// snap would be refused ([`mesh_core::remesh::SnapRefusal::Adjacent`]: that is an edge
+/// collapse). Asked before any split is made: a split vertex is joined to the ends of its
+/// edge and to the third vertex of every triangle on it, a trisection's to the corners.
+/// Most such pairs are a sliver's own edge against its apex — one sheet, not two — and
+/// splitting, refusing and undoing each of them (three guarded edits) was most of the
+/// merge's work on crowded contacts.
+fn would_share_an_edge(mesh: &LabeledMesh, x: Counterpart, y: Counterpart) -> bool {
+    use Counterpart::*;
+    let joined = |u: VertexId, w: VertexId| {
+        u == w || mesh.vertex_triangles(u).any(|t| mesh.tri(t).contains(&w))
+    };
+    let on_edge_triangles = |u: VertexId, a: VertexId, b: VertexId| {
+        u == a || u == b || mesh.edge_triangles(a, b).any(|t| mesh.tri(t).contains(&u))
+    };
+    match (x, y) {
+        (Existing(u), Existing(w)) => joined(u, w),
+        (Existing(u), OnEdge(a, b, _)) | (OnEdge(a, b, _), Existing(u)) => {
+            on_edge_triangles(u, a, b)
+        }
+        (Existing(u), OnTriangle(t, _)) | (OnTriangle(t, _), Existing(u)) => {
+            mesh.tri(t).contains(&u)
+        }
+        // Two new vertices are joined only if they split one edge.
+        (OnEdge(a, b, _), OnEdge(p, q, _)) => [a, b] == [p, q] || [a, b] == [q, p],
+        (OnEdge(..) | OnTriangle(..), OnEdge(..) | OnTriangle(..)) => false,
+    }
+}
+
+/// Makes the planned counterpart: the vertex itself, or the split (recorded in `splits`).
+/// `None` when a split was refused or vetoed.
+fn make(
     mesh: &mut LabeledMesh,
     attrs: &mut VertexAttributes,
     guard: &mut dyn EditGuard,
-    a: VertexId,
-    b: VertexId,
-    s: f64,
-    d: f64,
+    plan: Counterpart,
     splits: &mut Vec<(VertexId, SplitRecord)>,
     report: &mut MergeReport,
 ) -> Result<Option<VertexId>, MergeError> {
-    let len = (mesh.position(b) - mesh.position(a)).length();
-    if s * len <= d {
-        return Ok(Some(a));
+    match plan {
+        Counterpart::Existing(v) => Ok(Some(v)),
+        Counterpart::OnEdge(a, b, s) => split_edge(mesh, attrs, guard, a, b, s, splits, report),
+        Counterpart::OnTriangle(t, bary) => {
+            let record = SplitRecord::triangle(mesh, t);
+            let split = split_triangle_at(mesh, attrs, guard, t, bary);
+            keep_split(split, record, |r| &mut r.face_splits, splits, report)
+        }
     }
-    if (1.0 - s) * len <= d {
-        return Ok(Some(b));
-    }
-    split_edge(mesh, attrs, guard, a, b, s, splits, report)
 }
 
 /// Splits edge `{a, b}` at `s`, recording the split in `splits`.
