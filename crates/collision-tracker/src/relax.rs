@@ -8,8 +8,11 @@
 //!                        → step · area-weighted Laplacian (normal part included)
 //!         curve vertex   (exactly two non-manifold edges, three labels around it)
 //!                        → step · (midpoint of its two curve neighbours − itself)
-//!         refused when a triangle would turn by more than 60° or a label's volume
-//!         change exceed Ω; each move one guarded edit
+//!         refused when a triangle would turn by more than 60° or invert, or a label's
+//!         volume change exceed Ω
+//!     the moves of a pass computed from one snapshot (in parallel) and committed by
+//!     mesh-core's batched smoothing commit: independent sets of moves, each set one
+//!     guarded pseudo-motion, offenders retried alone
 //! ```
 //!
 //! **Why.** Improvement's null-space smoothing keeps sharp features, so the creases of a
@@ -24,10 +27,9 @@
 //! free-surface features keep what improvement gives them.
 
 use glam::DVec3;
-use mesh_core::remesh::{
-    Edit, EditGuard, VertexAttributes, VertexMove, apply_edit, max_label_volume_change, normal_cos,
-};
+use mesh_core::remesh::{EditGuard, Proposal, SmoothParams, VertexAttributes, commit_moves};
 use mesh_core::{Label, LabeledMesh, VertexId};
+use rayon::prelude::*;
 
 /// Options of [`relax_walls`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -57,37 +59,35 @@ pub(crate) fn relax_walls(
     options: &RelaxOptions,
 ) -> RelaxReport {
     let mut report = RelaxReport::default();
-    let mut edit = Edit::default();
-    let mut volumes = Vec::new();
+    let checks = SmoothParams {
+        max_volume_change: options.max_volume_change,
+        min_normal_cos: 0.5,
+        conserve_volume: false,
+        ..SmoothParams::default()
+    };
     for _ in 0..options.passes {
-        let vertices: Vec<VertexId> = mesh.vertices().collect();
-        let moved_before = report.moved;
-        for v in vertices {
-            let Some(target) = relaxed_position(mesh, v, options.step) else {
-                continue;
-            };
-            let p = mesh.position(v);
-            if p.distance(target) < options.min_move {
-                continue;
-            }
-            edit.clear();
-            edit.moves.push(VertexMove {
-                vertex: v,
-                end: target,
-                blend: None,
-            });
-            if turns(mesh, v, target)
-                || max_label_volume_change(mesh, &edit, &mut volumes) > options.max_volume_change
-            {
-                report.refused += 1;
-                continue;
-            }
-            match apply_edit(mesh, attrs, guard, &edit) {
-                Ok(_) => report.moved += 1,
-                Err(_) => report.refused += 1,
-            }
-        }
-        if report.moved == moved_before {
+        let snapshot: &LabeledMesh = mesh;
+        let proposals: Vec<Proposal> = (0..snapshot.vertex_capacity() as u32)
+            .into_par_iter()
+            .with_min_len(256)
+            .filter_map(|i| {
+                let v = VertexId::new(i);
+                if !snapshot.is_vertex_alive(v) {
+                    return None;
+                }
+                let target = relaxed_position(snapshot, v, options.step)?;
+                let displacement = target - snapshot.position(v);
+                (displacement.length() >= options.min_move).then_some(Proposal {
+                    vertex: v,
+                    displacement,
+                    normal: None,
+                })
+            })
+            .collect();
+        let out = commit_moves(mesh, attrs, guard, &checks, &proposals);
+        report.moved += out.moved;
+        report.refused += out.refused + out.vetoed;
+        if out.moved == 0 {
             break;
         }
     }
@@ -160,15 +160,4 @@ fn relaxed_position(mesh: &LabeledMesh, v: VertexId, step: f64) -> Option<DVec3>
         }
         _ => None,
     }
-}
-
-/// True when a triangle at `v` would turn by more than 60° (or degenerate) if `v` moved
-/// to `target`.
-fn turns(mesh: &LabeledMesh, v: VertexId, target: DVec3) -> bool {
-    mesh.vertex_triangles(v).any(|t| {
-        let old = mesh.tri_positions(t);
-        let tri = mesh.tri(t);
-        let new = [0, 1, 2].map(|k| if tri[k] == v { target } else { old[k] });
-        normal_cos(&old, &new).is_none_or(|c| c < 0.5)
-    })
 }

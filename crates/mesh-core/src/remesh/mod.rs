@@ -59,7 +59,7 @@ pub use separate::{
     AreaDecrease, SeparationParams, SeparationReport, SeparationStrength, VelocityDivergence,
     separate_irregular_vertices, separate_irregular_vertices_in,
 };
-pub use smooth::{SmoothOutcome, SmoothParams, smooth_vertices};
+pub use smooth::{Proposal, SmoothOutcome, SmoothParams, commit_moves, smooth_vertices};
 pub use snap::{
     SnapError, SnapParams, SnapRefusal, SplitRecord, snap_vertices, split_edge_at,
     split_triangle_at, undo_split,

@@ -85,11 +85,16 @@ pub struct SmoothOutcome {
 }
 
 /// One proposed smoothing move: the vertex, its displacement, and the normal to conserve
-/// the volume along (`None` off smooth patches or with `conserve_volume` off).
+/// the volume along (`None` off smooth patches or with `conserve_volume` off). Other
+/// smoothing rules (the collision tracker's wall relaxation) propose their own and commit
+/// them with [`commit_moves`].
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Proposal {
+pub struct Proposal {
+    /// The vertex to move.
     pub vertex: VertexId,
+    /// Where to, relative to its position.
     pub displacement: DVec3,
+    /// The normal to shift the move along so that it keeps every label's volume.
     pub normal: Option<DVec3>,
 }
 
@@ -143,8 +148,9 @@ const MAX_GUARD_ROUNDS: usize = 4;
 /// the local checks of every move in parallel, and asks the guard about the batch once ([`EditGuard::offending_moves`]). Blamed moves, and whatever a batch could
 /// not clear, are committed one at a time afterwards, each as its own guarded edit, so
 /// the outcome is what per-move checking would allow, at the price of one index query
-/// per batch instead of one per move.
-pub(crate) fn commit_moves(
+/// per batch instead of one per move. Of `params`, the local checks read
+/// `min_normal_cos` and `max_volume_change`.
+pub fn commit_moves(
     mesh: &mut LabeledMesh,
     attrs: &mut VertexAttributes,
     guard: &mut dyn EditGuard,
