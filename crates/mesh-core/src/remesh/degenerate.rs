@@ -186,7 +186,8 @@ pub struct ThinRegionReport {
     pub absorbed: usize,
     /// Their summed volume (moved from their label to the neighbour's).
     pub volume: f64,
-    /// Thin regions left alone: a region of the same label may lie inside (a cavity the
+    /// Thin regions left alone: it is the last region of its label (absorbing it would
+    /// make a material vanish), a region of the same label may lie inside (a cavity the
     /// shell alone cannot tell from the region's own), or the edit was refused or vetoed.
     pub refused: usize,
 }
@@ -259,6 +260,16 @@ pub fn remove_thin_regions(
                 }
             }
         }
+        // Shells per label: the last one of a label is never absorbed, so no material
+        // disappears here (a droplet below resolution is T2's to remove, and the caller's
+        // to be told about).
+        let mut per_label: Vec<(Label, usize)> = Vec::new();
+        for shell in &regions.shells {
+            match per_label.iter_mut().find(|(l, _)| *l == shell.label) {
+                Some(entry) => entry.1 += 1,
+                None => per_label.push((shell.label, 1)),
+            }
+        }
         let mut touched = vec![false; mesh.triangle_capacity()];
         let mut changed = false;
         for &s in &thin {
@@ -279,7 +290,15 @@ pub fn remove_thin_regions(
                     && b.min.cmpge(boxes[s].min).all()
                     && b.max.cmple(boxes[s].max).all()
             });
-            let Some(into) = main_neighbour(mesh, own).filter(|_| !cavity) else {
+            let Some(count) = per_label
+                .iter_mut()
+                .find(|(l, _)| *l == shell.label)
+                .map(|entry| &mut entry.1)
+            else {
+                continue;
+            };
+            let last = *count <= 1;
+            let Some(into) = main_neighbour(mesh, own).filter(|_| !cavity && !last) else {
                 report.refused += 1;
                 continue;
             };
@@ -296,6 +315,7 @@ pub fn remove_thin_regions(
             remove_orphans(mesh, &mut edit);
             match apply_edit(mesh, attrs, guard, &edit) {
                 Ok(_) => {
+                    *count -= 1;
                     for &(t, _) in own {
                         touched[t.idx()] = true;
                     }
@@ -490,30 +510,40 @@ mod tests {
     }
 
     /// Tetrahedron 0123 (label 1 inside, 0 outside) with, glued on its face 012, a second
-    /// tetrahedron 0124 of label 2 whose apex lies `height` below the face's centre.
-    fn glued_tetrahedra(height: f64) -> LabeledMesh {
-        let p = vec![
+    /// tetrahedron 0124 of label 2 whose apex lies `height` below the face's centre; with
+    /// `spare`, a separate tetrahedron 5678 of label 2 far away (so that label 2 survives
+    /// the thin one's absorption).
+    fn glued_tetrahedra(height: f64, spare: bool) -> LabeledMesh {
+        let mut p = vec![
             DVec3::new(0.0, 0.0, 0.0),
             DVec3::new(1.0, 0.0, 0.0),
             DVec3::new(0.0, 1.0, 0.0),
             DVec3::new(0.0, 0.0, 1.0),
             DVec3::new(1.0 / 3.0, 1.0 / 3.0, -height),
         ];
+        let far = DVec3::new(10.0, 0.0, 0.0);
+        p.extend([p[0], p[1], p[2], p[3]].map(|q| q + far));
         // The shared face 012 first (its normal points to −z, into label 2), then the
         // outer faces of each tetrahedron: front faces away from the tetrahedron's centre.
         let mut tris = vec![[0u32, 2, 1]];
         let mut labels = vec![[2u32, 1]];
-        for (faces, inside, corners) in [
-            ([[0, 1, 3], [1, 2, 3], [0, 3, 2]], 1, [0usize, 1, 2, 3]),
-            ([[0, 1, 4], [1, 2, 4], [2, 0, 4]], 2, [0, 1, 2, 4]),
-        ] {
+        let spare_faces = [[5, 7, 6], [5, 6, 8], [6, 7, 8], [5, 8, 7]];
+        let tetrahedra = [
+            (&[[0, 1, 3], [1, 2, 3], [0, 3, 2]][..], 1, [0usize, 1, 2, 3]),
+            (&[[0, 1, 4], [1, 2, 4], [2, 0, 4]][..], 2, [0, 1, 2, 4]),
+            (&spare_faces[..], 2, [5, 6, 7, 8]),
+        ];
+        for &(faces, inside, corners) in &tetrahedra[..2 + usize::from(spare)] {
             let centre = corners.iter().map(|&i| p[i]).sum::<DVec3>() / 4.0;
-            for f in faces {
+            for &f in faces {
                 let [a, b, c] = f.map(|i: u32| p[i as usize]);
                 let outward = (b - a).cross(c - a).dot(a - centre) > 0.0;
                 tris.push(f);
                 labels.push(if outward { [0, inside] } else { [inside, 0] });
             }
+        }
+        if !spare {
+            p.truncate(5);
         }
         LabeledMesh::from_raw(p, &tris, &labels).unwrap()
     }
@@ -526,15 +556,18 @@ mod tests {
             .sum()
     }
 
+    /// The volume of the regular tetrahedron 0123 (the spare one).
+    const SPARE: f64 = 1.0 / 6.0;
+
     #[test]
     fn a_thin_region_is_absorbed_into_its_main_neighbour() {
         let params = ThinRegionParams {
             max_volume: 0.01,
             max_mean_thickness: 0.01,
         };
-        let mut m = glued_tetrahedra(1e-4);
+        let mut m = glued_tetrahedra(1e-4, true);
         assert!(crate::validate::validate(&m, &Default::default()).is_valid());
-        let thin = label_volume(&m, 2);
+        let thin = label_volume(&m, 2) - SPARE;
         assert!(thin > 0.0 && thin < 1e-4, "{thin}");
         let before_1 = label_volume(&m, 1);
         let r = remove_thin_regions(
@@ -548,17 +581,30 @@ mod tests {
         assert!((r.volume - thin).abs() < 1e-15);
         // Label 2 faced the outside on most of its area: its outer faces go, the face it
         // shared with label 1 now faces the outside, and the apex vertex is gone.
-        assert_eq!(m.num_triangles(), 4);
-        assert_eq!(m.num_vertices(), 4);
+        assert_eq!(m.num_triangles(), 4 + 4);
+        assert_eq!(m.num_vertices(), 4 + 4);
         assert!(crate::validate::validate(&m, &Default::default()).is_valid());
-        assert_eq!(label_volume(&m, 2), 0.0);
+        assert!((label_volume(&m, 2) - SPARE).abs() < 1e-15);
         assert!((label_volume(&m, 1) - before_1).abs() < 1e-15);
+
+        // Without the spare, the thin tetrahedron is all of label 2: absorbing it would
+        // make a material vanish, so it stays.
+        let mut m = glued_tetrahedra(1e-4, false);
+        let r = remove_thin_regions(
+            &mut m,
+            &mut VertexAttributes::none(),
+            &mut NoGuard,
+            &params,
+            None,
+        );
+        assert_eq!((r.absorbed, r.refused), (0, 1), "{r:?}");
+        assert_eq!(m.num_triangles(), 7);
     }
 
     #[test]
     fn regions_thicker_or_larger_than_the_bounds_stay() {
-        let mut m = glued_tetrahedra(1e-4);
-        let thin = label_volume(&m, 2);
+        let mut m = glued_tetrahedra(1e-4, true);
+        let thin = label_volume(&m, 2) - SPARE;
         for params in [
             // Thin, but more volume than one edit may move.
             ThinRegionParams {
@@ -579,7 +625,7 @@ mod tests {
                 None,
             );
             assert_eq!(r, ThinRegionReport::default());
-            assert_eq!(m.num_triangles(), 7);
+            assert_eq!(m.num_triangles(), 7 + 4);
         }
         // Thin and small, but no corner at the given vertices (vertex 3 is only on the
         // thick tetrahedron, which these bounds keep).
