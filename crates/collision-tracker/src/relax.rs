@@ -38,6 +38,7 @@
 //! free-surface features keep what improvement gives them.
 
 use glam::DVec3;
+use mesh_core::remesh::smooth::laplacian_displacement;
 use mesh_core::remesh::{EditGuard, Proposal, SmoothParams, VertexAttributes, commit_moves};
 use mesh_core::{Label, LabeledMesh, VertexId};
 use rayon::prelude::*;
@@ -112,7 +113,6 @@ fn relaxed_position(mesh: &LabeledMesh, v: VertexId, step: f64) -> Option<DVec3>
     let mut one_pair = true;
     let mut labels: [Option<Label>; 4] = [None; 4];
     let mut n_labels = 0usize;
-    let (mut sum, mut area) = (DVec3::ZERO, 0.0);
     for t in mesh.vertex_triangles(v) {
         let [a, b] = mesh.labels(t);
         let key = if a < b { [a, b] } else { [b, a] };
@@ -130,19 +130,13 @@ fn relaxed_position(mesh: &LabeledMesh, v: VertexId, step: f64) -> Option<DVec3>
                 n_labels += 1;
             }
         }
-        let q = mesh.tri_positions(t);
-        let w = 0.5 * (q[1] - q[0]).cross(q[2] - q[0]).length();
-        sum += w * ((q[0] + q[1] + q[2]) / 3.0 - p);
-        area += w;
     }
     let pair = pair?;
     if one_pair {
-        if pair.contains(&Label::OUTSIDE)
-            || area.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
-        {
+        if pair.contains(&Label::OUTSIDE) {
             return None;
         }
-        let own = sum / area;
+        let (own, _) = laplacian_displacement(mesh, v)?;
         let (mut ring, mut n) = (DVec3::ZERO, 0usize);
         for t in mesh.vertex_triangles(v) {
             for w in mesh.tri(t) {
@@ -184,7 +178,7 @@ fn wall_laplacian(mesh: &LabeledMesh, w: VertexId, pair: [Label; 2]) -> Option<D
     if !inside {
         return None;
     }
-    mesh_core::remesh::smooth::laplacian_displacement(mesh, w).map(|(d, _)| d)
+    laplacian_displacement(mesh, w).map(|(d, _)| d)
 }
 
 /// The two curve neighbours of `v`: the other ends of its non-manifold edges, if it has
