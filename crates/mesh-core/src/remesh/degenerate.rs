@@ -556,6 +556,14 @@ mod tests {
             .sum()
     }
 
+    fn absorb(
+        m: &mut LabeledMesh,
+        params: &ThinRegionParams,
+        only: Option<&[VertexId]>,
+    ) -> ThinRegionReport {
+        remove_thin_regions(m, &mut VertexAttributes::none(), &mut NoGuard, params, only)
+    }
+
     /// The volume of the regular tetrahedron 0123 (the spare one).
     const SPARE: f64 = 1.0 / 6.0;
 
@@ -570,13 +578,7 @@ mod tests {
         let thin = label_volume(&m, 2) - SPARE;
         assert!(thin > 0.0 && thin < 1e-4, "{thin}");
         let before_1 = label_volume(&m, 1);
-        let r = remove_thin_regions(
-            &mut m,
-            &mut VertexAttributes::none(),
-            &mut NoGuard,
-            &params,
-            None,
-        );
+        let r = absorb(&mut m, &params, None);
         assert_eq!(r.absorbed, 1, "{r:?}");
         assert!((r.volume - thin).abs() < 1e-15);
         // Label 2 faced the outside on most of its area: its outer faces go, the face it
@@ -590,13 +592,7 @@ mod tests {
         // Without the spare, the thin tetrahedron is all of label 2: absorbing it would
         // make a material vanish, so it stays.
         let mut m = glued_tetrahedra(1e-4, false);
-        let r = remove_thin_regions(
-            &mut m,
-            &mut VertexAttributes::none(),
-            &mut NoGuard,
-            &params,
-            None,
-        );
+        let r = absorb(&mut m, &params, None);
         assert_eq!((r.absorbed, r.refused), (0, 1), "{r:?}");
         assert_eq!(m.num_triangles(), 7);
     }
@@ -617,13 +613,7 @@ mod tests {
                 max_mean_thickness: 1e-6,
             },
         ] {
-            let r = remove_thin_regions(
-                &mut m,
-                &mut VertexAttributes::none(),
-                &mut NoGuard,
-                &params,
-                None,
-            );
+            let r = absorb(&mut m, &params, None);
             assert_eq!(r, ThinRegionReport::default());
             assert_eq!(m.num_triangles(), 7 + 4);
         }
@@ -634,22 +624,10 @@ mod tests {
             max_mean_thickness: 0.01,
         };
         let only = [VertexId::new(3)];
-        let r = remove_thin_regions(
-            &mut m,
-            &mut VertexAttributes::none(),
-            &mut NoGuard,
-            &params,
-            Some(&only),
-        );
+        let r = absorb(&mut m, &params, Some(&only));
         assert_eq!(r, ThinRegionReport::default());
         let only = [VertexId::new(4)];
-        let r = remove_thin_regions(
-            &mut m,
-            &mut VertexAttributes::none(),
-            &mut NoGuard,
-            &params,
-            Some(&only),
-        );
+        let r = absorb(&mut m, &params, Some(&only));
         assert_eq!(r.absorbed, 1);
     }
 
