@@ -104,11 +104,22 @@ pub const PRESETS: &[Preset] = &[
     },
     Preset {
         name: "volume",
-        summary: "collision: volume-conserving remeshing edits (smoothing, collapses, flips) vs El Topo's Ω bound alone, the default",
+        summary: "collision: which remeshing edits conserve volume: flips and collapses (the default), all (smoothing too), none (El Topo's Ω bound alone)",
         backends: COLLISION,
         settings: &[
-            ("conserving", &["collision.conserve_volume=true"]),
-            ("bounded", &["collision.conserve_volume=false"]),
+            (
+                "flips-collapses",
+                &["collision.conserve_volume.smoothing=false"],
+            ),
+            ("all", &["collision.conserve_volume.smoothing=true"]),
+            (
+                "none",
+                &[
+                    "collision.conserve_volume.flips=false",
+                    "collision.conserve_volume.collapses=false",
+                    "collision.conserve_volume.smoothing=false",
+                ],
+            ),
         ],
         fixed: &[],
     },

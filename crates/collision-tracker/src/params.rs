@@ -11,6 +11,7 @@ use std::fmt;
 use std::sync::Arc;
 
 use glam::{DMat3, DVec3};
+use mesh_core::remesh::ConserveVolume;
 use serde::{Deserialize, Serialize};
 
 /// The velocity gradient `∂u_i/∂x_j` (row `i`, column `j`) of an ambient flow at a point.
@@ -121,16 +122,14 @@ pub struct CollisionParams {
     /// Mesh improvement: splits, collapses, flips, null-space smoothing (El Topo §3.5–3.6).
     /// Default true.
     pub improve: bool,
-    /// Remeshing edits keep every label's volume where the surface lets them: smoothing
-    /// moves and smooth midpoint collapses shift along the normal, flips shift the new
-    /// edge's ends ([`mesh_core::remesh::ImproveParams::conserve_volume`]). On, one Enright
-    /// period at El Topo's Ω changes the volume by 0.14 % instead of 1.56 % (Delaunay flips
-    /// across the curved sheet take most of that out). Default **false** for now: on the
-    /// `double-bubble` scene it turns 1 merge / 3 splits / 717 T1 in 18.7 s into 4 / 5 /
-    /// 2482 in 43 s (the shrinking bubbles keep twice the triangles); why is not yet
-    /// understood, and events matter more than volume to most callers. Volume-sensitive
-    /// runs (advection tests, liquids) should turn it on.
-    pub conserve_volume: bool,
+    /// Which remeshing edits cancel their volume change by a shift along the normal
+    /// ([`ConserveVolume`], where the measurements of each kind are). Default: flips and
+    /// smooth midpoint collapses, not smoothing moves. With that, one Enright period at
+    /// El Topo's Ω = 0.1 ℓ³ changes the volume by 0.07 % (El Topo: 0.18 %), against
+    /// 1.56 % with none; smoothing shifts next to triple curves grow into fins under naive
+    /// normal flow, so they stay off. The relax stage never shifts (its wall moves are
+    /// bounded by Ω).
+    pub conserve_volume: ConserveVolume,
     /// Bound on the sweeps of one improvement call. Default 2: one step's motion leaves
     /// little to fix, and what is left is fixed next step. (10 expanding spheres: 4 sweeps
     /// cost 1.7× the time of 2 for the same triangle quality; smoothing moves every vertex
@@ -188,7 +187,11 @@ impl Default for CollisionParams {
             pinch: false,
             t2: true,
             improve: true,
-            conserve_volume: false,
+            conserve_volume: ConserveVolume {
+                flips: true,
+                collapses: true,
+                smoothing: false,
+            },
             improve_sweeps: 2,
             max_halvings: 6,
             max_displacement_factor: Some(8.0),

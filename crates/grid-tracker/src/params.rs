@@ -169,7 +169,9 @@ impl GridParams {
 /// that a record can reproduce a run. Every field of the mirror is optional on input
 /// (missing fields take [`ImproveParams::default`]'s values); `null` means improvement off.
 mod improve_serde {
-    use mesh_core::remesh::{FeatureParams, FlipCriterion, ImproveParams, SeparationParams};
+    use mesh_core::remesh::{
+        ConserveVolume, FeatureParams, FlipCriterion, ImproveParams, SeparationParams,
+    };
     use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
     /// [`FlipCriterion`] by name.
@@ -205,7 +207,7 @@ mod improve_serde {
         flip_criterion: Flip,
         flip_min_improvement: f64,
         min_normal_cos: f64,
-        conserve_volume: bool,
+        conserve_volume: ConserveVolume,
         feature_rank_ratio: f64,
         feature_curve_corner_angle_deg: f64,
         separation_fraction: f64,
