@@ -1,8 +1,9 @@
-//! Prints the quality of the wall between two labels in each given frame (issue 15):
+//! Prints the quality of the wall between two labels in each given frame (issue 15), and
+//! how much of their contact is not wall yet (`open_contact`):
 //! `cargo run --release -p bench-harness --example wall -- [--labels 1,2] FRAME.ply…`
 //! (e.g. the last frames of `surftrack run spheres --spheres 2` with both trackers).
 
-use bench_harness::wall::wall_quality;
+use bench_harness::wall::{OPEN_CONTACT_REACH, open_contact, wall_quality};
 use mesh_core::Label;
 use mesh_core::io::read_mesh;
 
@@ -24,9 +25,10 @@ fn main() {
         std::process::exit(2);
     }
     println!(
-        "| frame | wall triangles | area | radius | RMS to plane / radius | area tilted > 30° |"
+        "| frame | wall triangles | area | radius | RMS to plane / radius | area tilted > 30° \
+         | open contact (vertices < {OPEN_CONTACT_REACH} ℓ) |"
     );
-    println!("|---|---:|---:|---:|---:|---:|");
+    println!("|---|---:|---:|---:|---:|---:|---:|");
     for path in &args {
         let mesh = match read_mesh(std::path::Path::new(path)) {
             Ok(m) => m,
@@ -35,16 +37,17 @@ fn main() {
                 std::process::exit(2);
             }
         };
+        let open = open_contact(&mesh, labels[0], labels[1]);
         match wall_quality(&mesh, labels[0], labels[1]) {
             Some(q) => println!(
-                "| {path} | {} | {:.5} | {:.4} | {:.4} | {:.1} % |",
+                "| {path} | {} | {:.5} | {:.4} | {:.4} | {:.1} % | {open} |",
                 q.triangles,
                 q.area,
                 q.radius,
                 q.rms_over_radius,
                 100.0 * q.tilted_fraction
             ),
-            None => println!("| {path} | 0 | – | – | – | – |"),
+            None => println!("| {path} | 0 | – | – | – | – | {open} |"),
         }
     }
 }
