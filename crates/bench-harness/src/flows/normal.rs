@@ -167,6 +167,7 @@ impl NormalFlow {
         }
         let mut faces = PlaneLsq::default();
         let mut ifaces = Interfaces::default();
+        let p = mesh.position(v);
         for c in mesh.vertex_corners(v) {
             let t = c.tri();
             let n = area_normals[t.idx()];
@@ -177,7 +178,9 @@ impl NormalFlow {
             let s = sigma[t.idx()];
             faces.add(n / area, s, area);
             let [front, back] = mesh.labels(t);
-            ifaces.add(front, back, n, area, s);
+            let [x, y, z] = mesh.tri_positions(t);
+            let reach = area * ((x + y + z) / 3.0 - p);
+            ifaces.add(front, back, n, area, s, reach);
         }
         if ifaces.count == 0 {
             return DVec3::ZERO;
@@ -200,20 +203,45 @@ impl NormalFlow {
                         lsq.add(unit, i.speed, i.area);
                     }
                 }
-                lsq.solve(RANK_RATIO)
+                let v = lsq.solve(RANK_RATIO);
+                let fastest = ifaces.items[..ifaces.count]
+                    .iter()
+                    .map(|i| i.speed.abs())
+                    .fold(0.0, f64::max);
+                if v.length() > fastest && ifaces.opens_a_reflex_wedge() {
+                    v * (fastest / v.length())
+                } else {
+                    v
+                }
             }
         }
     }
 }
 
 /// One interface at a vertex: the label pair `lo < hi`, the sum of its incident area
-/// normals oriented into `hi`, their total area, and the speed of `lo` into `hi`.
+/// normals oriented into `hi`, their total area, the speed of `lo` into `hi`, and the
+/// area-weighted sum of its triangles' centroids relative to the vertex (which way the
+/// sheet leaves the vertex).
 #[derive(Clone, Copy, Default)]
 struct Interface {
     key: (u32, u32),
     normal: DVec3,
     area: f64,
     speed: f64,
+    reach: DVec3,
+}
+
+impl Interface {
+    /// The label this sheet moves into, if it moves.
+    fn grows_into(&self) -> Option<u32> {
+        if self.speed > 0.0 {
+            Some(self.key.1)
+        } else if self.speed < 0.0 {
+            Some(self.key.0)
+        } else {
+            None
+        }
+    }
 }
 
 /// Per-vertex interface accumulator in a fixed array, so the hot loop does not allocate.
@@ -227,7 +255,7 @@ struct Interfaces {
 impl Interfaces {
     /// Adds a triangle with labels `[front, back]`, area normal `n` (into `front`), area
     /// and speed `s` of `back` into `front`.
-    fn add(&mut self, front: Label, back: Label, n: DVec3, area: f64, s: f64) {
+    fn add(&mut self, front: Label, back: Label, n: DVec3, area: f64, s: f64, reach: DVec3) {
         // Orient into the higher label: flip when `front` is the lower one.
         let (key, n, s) = if front > back {
             ((back.raw(), front.raw()), n, s)
@@ -237,17 +265,68 @@ impl Interfaces {
         if let Some(item) = self.items[..self.count].iter_mut().find(|e| e.key == key) {
             item.normal += n;
             item.area += area;
+            item.reach += reach;
         } else if self.count < MAX_INTERFACES {
             self.items[self.count] = Interface {
                 key,
                 normal: n,
                 area,
                 speed: s,
+                reach,
             };
             self.count += 1;
         } else {
             self.overflow = true;
         }
+    }
+
+    /// True when two sheets grow into one label whose wedge between them, at this
+    /// vertex, is wider than 180°: every other sheet leaves the vertex inside the narrow
+    /// angle between the two. That is a convex edge of the growing materials — the tip of
+    /// a thin fin of two materials with their wall between them. Offsetting each sheet by
+    /// its own distance (the least-squares solve) moves such a tip along the fin at
+    /// `σ / sin(α/2)` for a fin of angle `α`, so a fin only grows; exact normal flow
+    /// rounds a convex edge instead (the expansion fan of Osher and Sethian's entropy
+    /// solution), and its tip advances at `σ`. At a concave edge — the rim where two
+    /// growing spheres meet, whose outside wedge is narrower than 180° — the offset
+    /// sheets do meet where least squares puts the junction, and that stays.
+    fn opens_a_reflex_wedge(&self) -> bool {
+        let items = &self.items[..self.count];
+        for (i, a) in items.iter().enumerate() {
+            for b in &items[i + 1..] {
+                let Some(x) = a.grows_into() else { continue };
+                if b.grows_into() != Some(x) {
+                    continue;
+                }
+                // The cross-section: the plane across the curve the two sheets share.
+                let tangent = a.normal.cross(b.normal).normalize_or_zero();
+                if tangent == DVec3::ZERO {
+                    continue;
+                }
+                let across = |d: DVec3| (d - tangent * tangent.dot(d)).normalize_or_zero();
+                let (da, db) = (across(a.reach), across(b.reach));
+                let inside_narrow = |d: DVec3| {
+                    let d = across(d);
+                    d != DVec3::ZERO
+                        && da.cross(d).dot(da.cross(db)) > 0.0
+                        && db.cross(d).dot(db.cross(da)) > 0.0
+                };
+                let others = items
+                    .iter()
+                    .filter(|o| o.key != a.key && o.key != b.key)
+                    .map(|o| o.reach);
+                let mut any = false;
+                let mut all = true;
+                for d in others {
+                    any = true;
+                    all &= inside_narrow(d);
+                }
+                if any && all {
+                    return true;
+                }
+            }
+        }
+        false
     }
 }
 
@@ -360,6 +439,27 @@ mod tests {
                 v[VertexId::new(4)]
             );
         }
+    }
+
+    /// The tip of a thin fin — bubbles a and b 15° wide each, their wall between them, all
+    /// around it the outside c they grow into — advances at the sheets' own speed, not at
+    /// the 1/sin 15° of the offset sheets' intersection; a rim whose outside wedge is 60°
+    /// (concave) keeps that intersection, at 1/sin 30°.
+    #[test]
+    fn a_fin_tip_advances_at_the_sheet_speed_a_concave_rim_at_the_miter() {
+        use crate::flows::test_meshes::triple_fan_at;
+        let (a, b, c) = (l(1), l(2), l(0));
+        let flow = NormalFlow::new(
+            InterfaceSpeeds::grow_into(c, 1.0),
+            NormalScheme::VertexNormals,
+        )
+        .unwrap();
+        // Sheets at: wall a|b, b|c, a|c (a lies from a|c to the wall, counter-clockwise).
+        let fin = flow.velocities(&triple_fan_at(a, b, c, [180.0, 195.0, 165.0]))[VertexId::new(0)];
+        assert!((fin.length() - 1.0).abs() < 1e-12, "{fin}");
+        assert!(fin.x > 0.99, "the tip moves away from the fin: {fin}");
+        let rim = flow.velocities(&triple_fan_at(a, b, c, [180.0, 330.0, 30.0]))[VertexId::new(0)];
+        assert!((rim - DVec3::new(2.0, 0.0, 0.0)).length() < 1e-12, "{rim}");
     }
 
     #[test]

@@ -91,9 +91,16 @@ fn sign(bit: i32) -> f64 {
 /// `a | b`, sheet 1 (210°) `b | c`, sheet 2 (330°) `c | a`. Triangles are oriented with
 /// the normal pointing counter-clockwise about z, i.e. into the wedge after the sheet.
 pub fn triple_fan(a: Label, b: Label, c: Label) -> LabeledMesh {
+    triple_fan_at(a, b, c, [90.0, 210.0, 330.0])
+}
+
+/// [`triple_fan`] with its three sheets (a|b, b|c, c|a) at the given angles in degrees,
+/// counter-clockwise in that order: `a` fills the angle from the c|a sheet to the a|b
+/// sheet, and so on.
+pub fn triple_fan_at(a: Label, b: Label, c: Label, degrees: [f64; 3]) -> LabeledMesh {
     let mut pos = vec![DVec3::ZERO, DVec3::Z, -DVec3::Z];
-    for k in 0..3 {
-        let angle = (90.0 + 120.0 * k as f64).to_radians();
+    for angle in degrees {
+        let angle = angle.to_radians();
         pos.push(DVec3::new(angle.cos(), angle.sin(), 0.0));
     }
     // (sheet vertex, wedge in front = counter-clockwise side, wedge behind)
