@@ -13,7 +13,8 @@
 //! two vertices of a feature curve merge only along a curve edge, onto one endpoint, so
 //! the curve keeps its vertices exactly. Everything else is refused. On an edge shorter
 //! than [`CollapseParams::min_feature_size`], ridges and corners count as smooth: a
-//! geometric feature that small is noise (feature curves are kept at every size). In the
+//! geometric feature that small is noise (feature curves are kept at every size, and so
+//! are their junctions; a kink of a curve that small merges like a curve vertex). In the
 //! [`CollapsePlacement::Midpoint`] mode (the collision tracker's T1/T2-initiating
 //! collapse) the endpoints always meet at the midpoint and their kinds are not asked.
 //!
@@ -253,16 +254,24 @@ pub(crate) fn collapse_edge_in(
             let ka = features::classify_vertex(mesh, a, &params.features);
             let kb = features::classify_vertex(mesh, b, &params.features);
             let below_features = pa.distance(pb) < params.min_feature_size;
-            let placed = |k: VertexKind| match k {
+            let dir = (pb - pa).normalize_or_zero();
+            let placed = |k: VertexKind, v: VertexId| match k {
                 VertexKind::Ridge { .. } | VertexKind::Corner if below_features => {
                     VertexKind::Smooth {
                         normal: DVec3::ZERO,
                     }
                 }
+                // A kink of a feature curve (two feature edges) that small is noise too:
+                // the curve goes on through it, so it merges along its curve edge like any
+                // curve vertex. Junctions of curves keep their place at every size.
+                VertexKind::CurveCorner
+                    if below_features && curve_edge && features::feature_degree(mesh, v) == 2 =>
+                {
+                    VertexKind::Curve { tangent: dir }
+                }
                 _ => k,
             };
-            let dir = (pb - pa).normalize_or_zero();
-            let t = placement(placed(ka), placed(kb), curve_edge, dir, params)?;
+            let t = placement(placed(ka, a), placed(kb, b), curve_edge, dir, params)?;
             (Some((ka, kb)), t)
         }
         CollapsePlacement::Midpoint => (None, 0.5),
@@ -709,6 +718,77 @@ pub(crate) mod tests {
         r.expect("an edge of √2 below a feature size of 1.5 collapses");
         assert_eq!(m.position(a), DVec3::new(0.5, 0.5, 0.0));
         assert!(!m.is_vertex_alive(b));
+    }
+
+    /// A double-bubble octahedron: labels 1 (top) and 2 (bottom) with the equatorial
+    /// square as their wall, so the equator is a triple curve with a 90° kink at every
+    /// vertex (two feature edges each). A curve edge between two kinks is kept while the
+    /// kinks are larger than the smallest feature size, and collapses along the curve onto
+    /// one end (the curve keeps its vertices) once they are smaller; the result is valid.
+    #[test]
+    fn curve_kinks_below_the_feature_size_collapse_along_the_curve() {
+        let p = vec![
+            DVec3::X,
+            DVec3::Y,
+            -DVec3::X,
+            -DVec3::Y,
+            DVec3::Z,
+            -DVec3::Z,
+        ];
+        let tris = [
+            [0, 1, 4],
+            [1, 2, 4],
+            [2, 3, 4],
+            [3, 0, 4],
+            [1, 0, 5],
+            [2, 1, 5],
+            [3, 2, 5],
+            [0, 3, 5],
+            [0, 1, 2],
+            [0, 2, 3],
+        ];
+        let labels = [
+            [0, 1],
+            [0, 1],
+            [0, 1],
+            [0, 1],
+            [0, 2],
+            [0, 2],
+            [0, 2],
+            [0, 2],
+            [1, 2],
+            [1, 2],
+        ];
+        let (a, b) = (VertexId::new(0), VertexId::new(1));
+        let collapse = |min_feature_size: f64| {
+            let mut m = LabeledMesh::from_raw(p.clone(), &tris, &labels).expect("valid arrays");
+            assert!(
+                crate::validate::validate(&m, &crate::validate::ValidateOptions::default())
+                    .is_valid()
+            );
+            let params = CollapseParams {
+                min_normal_cos: -1.0,
+                min_feature_size,
+                ..CollapseParams::default()
+            };
+            let r = collapse_edge(
+                &mut m,
+                &mut VertexAttributes::none(),
+                &mut NoGuard,
+                a,
+                b,
+                &params,
+            );
+            (r, m)
+        };
+        let (r, _) = collapse(1.0);
+        assert_eq!(r, Err(CollapseError::Refused(CollapseRefusal::Features)));
+        let (r, m) = collapse(1.5);
+        r.expect("a curve edge of √2 between kinks below a feature size of 1.5 collapses");
+        assert_eq!(m.position(a), DVec3::X);
+        assert!(!m.is_vertex_alive(b));
+        let report = crate::validate::validate(&m, &crate::validate::ValidateOptions::default());
+        assert!(report.is_valid(), "{report:?}");
     }
 
     #[test]

@@ -164,6 +164,14 @@ pub fn is_feature_edge(mesh: &LabeledMesh, a: VertexId, b: VertexId) -> bool {
     edge_corner(mesh, a, b).is_some_and(|c| edge_star(mesh, c).is_feature())
 }
 
+/// Number of feature edges at `v`: 2 inside a feature curve (kinked or not), another
+/// number at a junction of curves or a curve's end.
+pub(crate) fn feature_degree(mesh: &LabeledMesh, v: VertexId) -> usize {
+    let mut count = 0;
+    for_each_edge_at(mesh, v, |_, star| count += usize::from(star.is_feature()));
+    count
+}
+
 /// Calls `f(w, star)` once for every edge `{v, w}` at `v` (skipping degenerate triangles).
 pub(crate) fn for_each_edge_at(
     mesh: &LabeledMesh,
