@@ -456,19 +456,54 @@ pub(crate) mod tests {
     /// The octahedron of label 1 in label 0 with corners `p`, listed as +x, +y, −x, −y,
     /// +z, −z of the regular one; fronts face outwards while `p` keeps that shape. Shared
     /// with the flip tests, which squash it.
+    /// The octahedron's triangles over vertices `±x, ±y` (0–3, counter-clockwise from
+    /// `+x`), `+z` (4) and `−z` (5), outward.
+    const OCTAHEDRON: [[u32; 3]; 8] = [
+        [0, 1, 4],
+        [1, 2, 4],
+        [2, 3, 4],
+        [3, 0, 4],
+        [1, 0, 5],
+        [2, 1, 5],
+        [3, 2, 5],
+        [0, 3, 5],
+    ];
+
+    /// The regular octahedron's vertices, in [`OCTAHEDRON`]'s order.
+    const UNIT_OCTAHEDRON: [DVec3; 6] = [
+        DVec3::X,
+        DVec3::Y,
+        DVec3::NEG_X,
+        DVec3::NEG_Y,
+        DVec3::Z,
+        DVec3::NEG_Z,
+    ];
+
     pub(crate) fn octahedron_at(p: [DVec3; 6]) -> LabeledMesh {
-        let p = p.to_vec();
-        let tris = [
-            [0, 1, 4],
-            [1, 2, 4],
-            [2, 3, 4],
-            [3, 0, 4],
-            [1, 0, 5],
-            [2, 1, 5],
-            [3, 2, 5],
-            [0, 3, 5],
-        ];
-        LabeledMesh::from_raw(p, &tris, &[[0, 1]; 8]).expect("valid arrays")
+        LabeledMesh::from_raw(p.to_vec(), &OCTAHEDRON, &[[0, 1]; 8]).expect("valid arrays")
+    }
+
+    /// Collapses edge 0–1 of `m` onto vertex 0 with no normal limit and the given smallest
+    /// feature size; the outcome and the mesh after it.
+    fn collapse_first_edge(
+        mut m: LabeledMesh,
+        min_feature_size: f64,
+    ) -> (Result<(), CollapseError>, LabeledMesh) {
+        let p = CollapseParams {
+            min_normal_cos: -1.0,
+            min_feature_size,
+            ..CollapseParams::default()
+        };
+        let (a, b) = (VertexId::new(0), VertexId::new(1));
+        let r = collapse_edge(
+            &mut m,
+            &mut VertexAttributes::none(),
+            &mut NoGuard,
+            a,
+            b,
+            &p,
+        );
+        (r, m)
     }
 
     /// Everything smooth (no eigenvalue can exceed 2·λ1), no geometric limits.
@@ -686,32 +721,8 @@ pub(crate) mod tests {
     /// collapses to its midpoint like a smooth edge.
     #[test]
     fn corners_below_the_feature_size_collapse_to_the_midpoint() {
-        let unit = [
-            DVec3::X,
-            DVec3::Y,
-            -DVec3::X,
-            -DVec3::Y,
-            DVec3::Z,
-            -DVec3::Z,
-        ];
         let (a, b) = (VertexId::new(0), VertexId::new(1));
-        let collapse = |min_feature_size: f64| {
-            let mut m = octahedron_at(unit);
-            let p = CollapseParams {
-                min_normal_cos: -1.0,
-                min_feature_size,
-                ..CollapseParams::default()
-            };
-            let r = collapse_edge(
-                &mut m,
-                &mut VertexAttributes::none(),
-                &mut NoGuard,
-                a,
-                b,
-                &p,
-            );
-            (r, m)
-        };
+        let collapse = |size| collapse_first_edge(octahedron_at(UNIT_OCTAHEDRON), size);
         let (r, _) = collapse(1.0);
         assert_eq!(r, Err(CollapseError::Refused(CollapseRefusal::Features)));
         let (r, m) = collapse(1.5);
@@ -727,68 +738,26 @@ pub(crate) mod tests {
     /// one end (the curve keeps its vertices) once they are smaller; the result is valid.
     #[test]
     fn curve_kinks_below_the_feature_size_collapse_along_the_curve() {
-        let p = vec![
-            DVec3::X,
-            DVec3::Y,
-            -DVec3::X,
-            -DVec3::Y,
-            DVec3::Z,
-            -DVec3::Z,
-        ];
-        let tris = [
-            [0, 1, 4],
-            [1, 2, 4],
-            [2, 3, 4],
-            [3, 0, 4],
-            [1, 0, 5],
-            [2, 1, 5],
-            [3, 2, 5],
-            [0, 3, 5],
-            [0, 1, 2],
-            [0, 2, 3],
-        ];
-        let labels = [
-            [0, 1],
-            [0, 1],
-            [0, 1],
-            [0, 1],
-            [0, 2],
-            [0, 2],
-            [0, 2],
-            [0, 2],
-            [1, 2],
-            [1, 2],
-        ];
-        let (a, b) = (VertexId::new(0), VertexId::new(1));
-        let collapse = |min_feature_size: f64| {
-            let mut m = LabeledMesh::from_raw(p.clone(), &tris, &labels).expect("valid arrays");
-            assert!(
-                crate::validate::validate(&m, &crate::validate::ValidateOptions::default())
-                    .is_valid()
-            );
-            let params = CollapseParams {
-                min_normal_cos: -1.0,
-                min_feature_size,
-                ..CollapseParams::default()
-            };
-            let r = collapse_edge(
-                &mut m,
-                &mut VertexAttributes::none(),
-                &mut NoGuard,
-                a,
-                b,
-                &params,
-            );
-            (r, m)
+        let mut tris = OCTAHEDRON.to_vec();
+        tris.extend([[0, 1, 2], [0, 2, 3]]);
+        let mut labels = vec![[0, 1]; 4];
+        labels.extend([[0, 2]; 4]);
+        labels.extend([[1, 2]; 2]);
+        let mesh =
+            LabeledMesh::from_raw(UNIT_OCTAHEDRON.to_vec(), &tris, &labels).expect("valid arrays");
+        let valid = |m: &LabeledMesh| {
+            crate::validate::validate(m, &crate::validate::ValidateOptions::default()).is_valid()
         };
+        assert!(valid(&mesh));
+        let (a, b) = (VertexId::new(0), VertexId::new(1));
+        let collapse = |size| collapse_first_edge(mesh.clone(), size);
         let (r, _) = collapse(1.0);
         assert_eq!(r, Err(CollapseError::Refused(CollapseRefusal::Features)));
         let (r, m) = collapse(1.5);
         r.expect("a curve edge of √2 between kinks below a feature size of 1.5 collapses");
         assert_eq!(m.position(a), DVec3::X);
         assert!(!m.is_vertex_alive(b));
-        let report = crate::validate::validate(&m, &crate::validate::ValidateOptions::default());
-        assert!(report.is_valid(), "{report:?}");
+        assert!(valid(&m));
     }
 
     #[test]
