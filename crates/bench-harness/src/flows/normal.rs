@@ -19,6 +19,11 @@
 //!   with a stationary shared wall, the triple curve moves along the wall at `1/cos 30°`,
 //!   which keeps both outer sheets on their expanding spheres; for cyclical speeds
 //!   around a symmetric junction the equations cancel and the curve stays put.
+//! - Except at a convex edge of the growing materials (two sheets grow into one label
+//!   whose wedge at the vertex is wider than 180°: the tip of a thin fin of two materials
+//!   with their wall inside it). There the least-squares junction would run along the fin
+//!   at `σ / sin(α/2)` and every fin would grow; exact normal flow rounds a convex edge,
+//!   so the vertex moves at most at the fastest sheet's speed.
 //! - A pinch, where two sheets of the *same* interface touch at a vertex, counts as one
 //!   interface: their normals are summed and may cancel (the vertex then stays).
 //! - More than [`MAX_INTERFACES`] interfaces at one vertex (not seen in valid scenes):
