@@ -407,6 +407,41 @@ mod tests {
             .unwrap_err();
         assert!(matches!(err, OptionsError::Value { .. }), "{err}");
         assert!(OptionsBuilder::default().set("novalue").is_err());
+
+        // Volume conservation by kind, by path or by one bool (the form of older records).
+        use mesh_core::remesh::ConserveVolume;
+        let conserve = |sets: &[&str], config: &str| {
+            let mut b = OptionsBuilder::default();
+            for s in sets {
+                b.set(s)?;
+            }
+            b.config_text(config, "t")?;
+            b.build().map(|o| o.collision.conserve_volume)
+        };
+        let default = RunOptions::default().collision.conserve_volume;
+        assert!(default.flips && default.collapses && !default.smoothing);
+        let with_smoothing = ConserveVolume {
+            smoothing: true,
+            ..default
+        };
+        assert_eq!(
+            conserve(&["collision.conserve_volume.smoothing=true"], "").unwrap(),
+            with_smoothing
+        );
+        assert_eq!(
+            conserve(&[], "[collision.conserve_volume]\nsmoothing = true\n").unwrap(),
+            with_smoothing
+        );
+        assert_eq!(
+            conserve(&["collision.conserve_volume=true"], "").unwrap(),
+            ConserveVolume::ALL
+        );
+        assert_eq!(
+            conserve(&["collision.conserve_volume=false"], "").unwrap(),
+            ConserveVolume::OFF
+        );
+        assert!(conserve(&["collision.conserve_volume={ flips = true }"], "").is_err());
+        assert!(conserve(&["collision.conserve_volume.shifts=true"], "").is_err());
         assert!(
             OptionsBuilder::default()
                 .config_text("[grid]\nnope = 1\n", "t")

@@ -164,8 +164,12 @@ impl Default for ImproveParams {
 /// junctions, such a bump on two expanding spheres (`spheres --spheres 2 --seed 10`)
 /// grew into a fin half a sphere radius long. With that flow they leave the wall as
 /// smooth as the other kinds (seeds 4, 9, 10).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, serde::Deserialize)]
-#[serde(default, deny_unknown_fields)]
+///
+/// Serialised as a table of the three kinds. Read back from that table (all three
+/// required: a partial table would silently turn the missing kinds off) or from one bool,
+/// the form of records and scripts written before the kinds were separate: `true` is
+/// [`ConserveVolume::ALL`], `false` [`ConserveVolume::OFF`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct ConserveVolume {
     /// A flip shifts the ends of its new edge.
     pub flips: bool,
@@ -173,6 +177,36 @@ pub struct ConserveVolume {
     pub collapses: bool,
     /// A smoothing move shifts along the vertex normal.
     pub smoothing: bool,
+}
+
+impl<'de> serde::Deserialize<'de> for ConserveVolume {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(serde::Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Kinds {
+            flips: bool,
+            collapses: bool,
+            smoothing: bool,
+        }
+        #[derive(serde::Deserialize)]
+        #[serde(
+            untagged,
+            expecting = "a bool or a table of flips, collapses, smoothing"
+        )]
+        enum Form {
+            Every(bool),
+            Kinds(Kinds),
+        }
+        Ok(match Form::deserialize(d)? {
+            Form::Every(true) => Self::ALL,
+            Form::Every(false) => Self::OFF,
+            Form::Kinds(k) => Self {
+                flips: k.flips,
+                collapses: k.collapses,
+                smoothing: k.smoothing,
+            },
+        })
+    }
 }
 
 impl ConserveVolume {
