@@ -453,9 +453,6 @@ pub(crate) mod tests {
         octahedron_at([p0, DVec3::Y, -DVec3::X, -DVec3::Y, DVec3::Z, -DVec3::Z])
     }
 
-    /// The octahedron of label 1 in label 0 with corners `p`, listed as +x, +y, −x, −y,
-    /// +z, −z of the regular one; fronts face outwards while `p` keeps that shape. Shared
-    /// with the flip tests, which squash it.
     /// The octahedron's triangles over vertices `±x, ±y` (0–3, counter-clockwise from
     /// `+x`), `+z` (4) and `−z` (5), outward.
     const OCTAHEDRON: [[u32; 3]; 8] = [
@@ -479,6 +476,9 @@ pub(crate) mod tests {
         DVec3::NEG_Z,
     ];
 
+    /// The octahedron of label 1 in label 0 with corners `p`, listed as +x, +y, −x, −y,
+    /// +z, −z of the regular one; fronts face outwards while `p` keeps that shape. Shared
+    /// with the flip tests, which squash it.
     pub(crate) fn octahedron_at(p: [DVec3; 6]) -> LabeledMesh {
         LabeledMesh::from_raw(p.to_vec(), &OCTAHEDRON, &[[0, 1]; 8]).expect("valid arrays")
     }
