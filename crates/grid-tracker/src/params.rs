@@ -5,7 +5,7 @@
 //! edge lengths in 0.5–1.5 ℓ) or bounds the loops that make a step always terminate
 //! (safety net §9.2, the sub-ℓ intersection pass that goes beyond the paper).
 
-use mesh_core::remesh::ImproveParams;
+use mesh_core::remesh::{BlockParams, ImproveParams};
 use serde::{Deserialize, Serialize};
 
 use crate::stages::flaws::{FlawOptions, Resampling};
@@ -79,6 +79,10 @@ pub struct GridParams {
     pub improve: Option<ImproveParams>,
     /// Which triangles improvement works on. Default [`ImproveScope::Local`].
     pub improve_scope: ImproveScope,
+    /// Improvement on every core, by blocks of space, when its work list is large
+    /// (`mesh_core::remesh::blocks`). Default [`BlockParams::default`]; `passes = 0`
+    /// keeps it serial.
+    pub improve_blocks: BlockParams,
     /// Bound on safety-net restarts (§9.2) per step: each one grows the flawed region
     /// where a stage found an inconsistency and redoes cut → rebuild. Default 8.
     pub max_safety_rounds: usize,
@@ -121,6 +125,7 @@ impl Default for GridParams {
             flaws: FlawOptions::default(),
             improve: Some(ImproveParams::default()),
             improve_scope: ImproveScope::Local,
+            improve_blocks: BlockParams::default(),
             max_safety_rounds: 8,
             subcell: SubcellPass::Require,
             max_subcell_rounds: 6,

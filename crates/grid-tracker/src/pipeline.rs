@@ -20,8 +20,8 @@ use std::time::{Duration, Instant};
 
 use glam::IVec3;
 use mesh_core::remesh::{
-    Applied, AreaDecrease, Edit, EditGuard, ImproveParams, ImproveRegion, ImproveReport, NoGuard,
-    StaticIntersectionGuard, VertexAttributes, Veto, improve, improve_in,
+    Applied, Edit, EditGuard, ImproveParams, ImproveRegion, ImproveReport, NoGuard,
+    StaticIntersectionGuard, VertexAttributes, Veto, improve_in_blocks,
 };
 use mesh_core::validate::{ValidateOptions, validate};
 use mesh_core::{LabeledMesh, StageTiming, TriId, VertexId};
@@ -527,79 +527,15 @@ fn transfer(
     Ok(out)
 }
 
-/// Restricts edits to the triangles a step created (and those the edits create from
-/// them): the paper's *local* mesh improvement (§8.5), so that every other triangle is
-/// kept exactly. Edits outside are vetoed before the inner guard is asked.
-struct LocalGuard<'g> {
-    inner: &'g mut dyn EditGuard,
-    /// `editable[t]`: triangle slot `t` may be removed or deformed.
-    editable: Vec<bool>,
-}
-
-impl LocalGuard<'_> {
-    fn editable(&self, t: TriId) -> bool {
-        self.editable.get(t.idx()).copied().unwrap_or(false)
-    }
-
-    /// A triangle at `v` outside the region, if any: moving or removing `v` would deform it.
-    fn fenced(&self, mesh: &LabeledMesh, v: VertexId) -> Option<TriId> {
-        mesh.vertex_triangles(v).find(|&t| !self.editable(t))
-    }
-}
-
-impl EditGuard for LocalGuard<'_> {
-    fn check_vertex(&mut self, mesh: &LabeledMesh, v: VertexId) -> Result<(), Veto> {
-        match self.fenced(mesh, v) {
-            Some(tri) => Err(Veto::OutsideRegion { tri }),
-            None => self.inner.check_vertex(mesh, v),
-        }
-    }
-
-    fn check(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), Veto> {
-        if let Some(&tri) = edit.remove_tris.iter().find(|&&t| !self.editable(t)) {
-            return Err(Veto::OutsideRegion { tri });
-        }
-        for m in &edit.moves {
-            if let Some(tri) = self.fenced(mesh, m.vertex) {
-                return Err(Veto::OutsideRegion { tri });
-            }
-        }
-        self.inner.check(mesh, edit)
-    }
-
-    /// Moves outside the region are blamed first (the caller asks again without them);
-    /// a batch inside it goes to the inner guard whole.
-    fn offending_moves(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Option<Vec<usize>> {
-        let outside: Vec<usize> = (0..edit.moves.len())
-            .filter(|&i| self.fenced(mesh, edit.moves[i].vertex).is_some())
-            .collect();
-        if outside.is_empty() {
-            self.inner.offending_moves(mesh, edit)
-        } else {
-            Some(outside)
-        }
-    }
-
-    fn committed(&mut self, mesh: &LabeledMesh, edit: &Edit, applied: &Applied) {
-        for &t in &applied.triangles {
-            if t.idx() >= self.editable.len() {
-                self.editable.resize(t.idx() + 1, false);
-            }
-            self.editable[t.idx()] = true;
-        }
-        self.inner.committed(mesh, edit, applied);
-    }
-}
-
 /// Vetoes every edit once `deadline` has passed: improvement's sweeps are bounded in
 /// number but not in time, and its edits are the only place it can be stopped from
 /// outside without leaving a half-done edit.
-struct DeadlineGuard<'g> {
-    inner: &'g mut dyn EditGuard,
+struct DeadlineGuard {
+    inner: Box<dyn EditGuard>,
     deadline: Instant,
 }
 
-impl EditGuard for DeadlineGuard<'_> {
+impl EditGuard for DeadlineGuard {
     fn check_vertex(&mut self, mesh: &LabeledMesh, v: VertexId) -> Result<(), Veto> {
         self.inner.check_vertex(mesh, v)
     }
@@ -629,7 +565,9 @@ impl EditGuard for DeadlineGuard<'_> {
 /// ([`StaticIntersectionGuard`]), so improvement keeps an intersection-free mesh so.
 /// Returns `None` when there was nothing to improve (local scope, nothing created).
 /// With a `deadline`, every edit after it is vetoed ([`DeadlineGuard`]), so improvement
-/// ends within one edit check of a time budget.
+/// ends within one edit check of a time budget. Large work lists are improved by blocks
+/// on every core ([`improve_in_blocks`], [`GridParams::improve_blocks`]); each block and
+/// the final serial pass get their own guard.
 pub(crate) fn improve_mesh(
     mesh: &mut LabeledMesh,
     attrs: &mut VertexAttributes,
@@ -643,60 +581,55 @@ pub(crate) fn improve_mesh(
         target_edge_length: Some(cell_size),
         ..improve_params.clone()
     };
-    let mut exact = StaticIntersectionGuard::new();
-    let mut none = NoGuard;
-    let inner: &mut dyn EditGuard = if params.subcell == SubcellPass::Off {
-        &mut none
-    } else {
-        &mut exact
-    };
-    let mut timed;
-    let inner: &mut dyn EditGuard = match deadline {
-        Some(deadline) => {
-            timed = DeadlineGuard { inner, deadline };
-            &mut timed
+    let exact = params.subcell != SubcellPass::Off;
+    let make_guard = move || -> Box<dyn EditGuard> {
+        let inner: Box<dyn EditGuard> = if exact {
+            Box::new(StaticIntersectionGuard::new())
+        } else {
+            Box::new(NoGuard)
+        };
+        match deadline {
+            Some(deadline) => Box::new(DeadlineGuard { inner, deadline }),
+            None => inner,
         }
-        None => inner,
     };
-    match params.improve_scope {
-        ImproveScope::Whole => Some(improve(mesh, &improve_params, attrs, inner)),
-        ImproveScope::Local => {
-            let region = ImproveRegion::Around {
+    let (region, editable) = match params.improve_scope {
+        ImproveScope::Whole => (ImproveRegion::Whole, None),
+        ImproveScope::Local => (
+            ImproveRegion::Around {
                 seeds: created,
                 degraded: true,
-            };
-            Some(improve_in(
-                mesh,
-                &improve_params,
-                region,
-                attrs,
-                inner,
-                &AreaDecrease,
-            ))
-        }
+            },
+            None,
+        ),
         ImproveScope::Changed => {
             if created.is_empty() {
                 return None;
             }
+            // The paper's local improvement (§8.5): only the triangles this step created,
+            // and those the edits create from them, may change.
             let mut editable = vec![false; mesh.triangle_capacity()];
             for &t in created {
                 if let Some(e) = editable.get_mut(t.idx()) {
                     *e = true;
                 }
             }
-            let mut guard = LocalGuard { inner, editable };
-            let region = ImproveRegion::Around {
-                seeds: created,
-                degraded: false,
-            };
-            Some(improve_in(
-                mesh,
-                &improve_params,
-                region,
-                attrs,
-                &mut guard,
-                &AreaDecrease,
-            ))
+            (
+                ImproveRegion::Around {
+                    seeds: created,
+                    degraded: false,
+                },
+                Some(editable),
+            )
         }
-    }
+    };
+    Some(improve_in_blocks(
+        mesh,
+        &improve_params,
+        region,
+        editable,
+        attrs,
+        &params.improve_blocks,
+        &make_guard,
+    ))
 }

@@ -83,6 +83,15 @@ impl VertexAttributes {
         &mut self.values[v.idx() * self.dim..(v.idx() + 1) * self.dim]
     }
 
+    /// Grows the values to `mesh`'s vertex capacity (new slots zero), after vertices were
+    /// added other than by an edit.
+    pub(crate) fn fit(&mut self, mesh: &LabeledMesh) {
+        let need = mesh.vertex_capacity() * self.dim;
+        if self.values.len() < need {
+            self.values.resize(need, 0.0);
+        }
+    }
+
     /// Updates the attributes for an applied edit: blends for new and moved vertices.
     /// Blends read the values from before the edit, so the order of entries is irrelevant.
     pub(crate) fn apply(&mut self, mesh: &LabeledMesh, edit: &Edit, applied: &Applied) {

@@ -244,6 +244,10 @@ pub enum ImproveRegion<'a> {
         /// Also seed with the degraded triangles of the whole mesh.
         degraded: bool,
     },
+    /// Start from exactly these vertices (dead ones are skipped): a work list carried over
+    /// from an earlier call, as the block driver ([`super::blocks`]) hands on the
+    /// places one pass had to leave.
+    Vertices(&'a [VertexId]),
 }
 
 /// Outcome counts of one operation.
@@ -298,6 +302,9 @@ pub struct ImproveReport {
     /// largest label volume change each caused: a bound on every label's total change
     /// from those operations (each term is ≤ Ω).
     pub volume_change_bound: f64,
+    /// Blocks improved in parallel, summed over passes ([`super::blocks`]); 0 when
+    /// improvement ran serially.
+    pub blocks: usize,
     /// Distinct edges at the end.
     pub edges: usize,
     /// Fraction of them with length in `[min, max] × target`.
@@ -305,6 +312,37 @@ pub struct ImproveReport {
 }
 
 impl ImproveReport {
+    /// Adds the counts of `other`, a run over another part of the mesh or a later pass
+    /// over this one: operation counts, refusals, vetoes and the volume bound are summed,
+    /// sweeps are the most either took, and the result converged only if both did. The
+    /// end-of-run edge figures are left to the caller (they describe one mesh).
+    pub fn absorb(&mut self, other: &ImproveReport) {
+        let add = |a: &mut OpCounts, b: &OpCounts| {
+            a.done += b.done;
+            a.refused += b.refused;
+            a.vetoed += b.vetoed;
+        };
+        self.sweeps = self.sweeps.max(other.sweeps);
+        self.converged &= other.converged;
+        add(&mut self.split, &other.split);
+        self.split_midpoint_fallbacks += other.split_midpoint_fallbacks;
+        add(&mut self.collapse, &other.collapse);
+        for (k, n) in &other.collapse_refusals {
+            *self.collapse_refusals.entry(k).or_default() += n;
+        }
+        for (k, n) in &other.vetoes {
+            *self.vetoes.entry(k).or_default() += n;
+        }
+        add(&mut self.flip, &other.flip);
+        add(&mut self.smooth, &other.smooth);
+        add_degenerate(&mut self.degenerate, &other.degenerate);
+        self.separations += other.separations;
+        self.separations_vetoed += other.separations_vetoed;
+        self.pinched += other.pinched;
+        self.volume_change_bound += other.volume_change_bound;
+        self.blocks += other.blocks;
+    }
+
     /// The edits committed: splits, collapses, flips, smoothing moves, separations and
     /// pinches (the count a tracker reports as its remeshing edits).
     pub fn edits(&self) -> usize {
@@ -367,6 +405,16 @@ pub fn improve_in(
     let mut work: Option<Vec<VertexId>> = match region {
         ImproveRegion::Whole => None,
         ImproveRegion::Around { seeds, degraded } => Some(run.initial_work(mesh, seeds, degraded)),
+        ImproveRegion::Vertices(vertices) => {
+            let mut w: Vec<VertexId> = vertices
+                .iter()
+                .copied()
+                .filter(|&v| mesh.is_vertex_alive(v))
+                .collect();
+            w.sort_unstable();
+            w.dedup();
+            Some(w)
+        }
     };
     // Seconds per operation, for the debug log below.
     let mut secs = [0.0f64; 8];
@@ -791,37 +839,9 @@ impl<'p> Run<'p> {
         }
     }
 
-    /// The first sweep's work list of [`ImproveRegion::Around`]: the seeds' vertices and,
-    /// when `degraded`, those of every triangle out of range or shape.
+    /// The first sweep's work list of [`ImproveRegion::Around`].
     fn initial_work(&self, mesh: &LabeledMesh, seeds: &[TriId], degraded: bool) -> Vec<VertexId> {
-        let (lo, hi) = self.range();
-        let min_angle = self.params.seed_min_angle_deg.to_radians();
-        let alive = mesh.tri_alive_flags();
-        let mut work: Vec<VertexId> = seeds
-            .iter()
-            .filter(|t| alive.get(t.idx()).copied().unwrap_or(false))
-            .flat_map(|&t| mesh.tri(t))
-            .collect();
-        if degraded {
-            work.par_extend(
-                (0..mesh.triangle_capacity())
-                    .into_par_iter()
-                    .with_min_len(1024)
-                    .filter(|&t| alive[t])
-                    .flat_map_iter(|t| {
-                        let t = TriId::new(t as u32);
-                        let p = mesh.tri_positions(t);
-                        let out = (0..3).any(|k| {
-                            let l = p[k].distance(p[(k + 1) % 3]);
-                            !(lo..=hi).contains(&l)
-                        }) || crate::geometry::triangle_min_angle(&p) < min_angle;
-                        out.then(|| mesh.tri(t)).into_iter().flatten()
-                    }),
-            );
-        }
-        work.par_sort_unstable();
-        work.dedup();
-        work
+        initial_work(mesh, self.params, self.range(), seeds, degraded)
     }
 
     /// The candidate edges of a stage whose length passes `keep`: of every edge, or of
@@ -1083,6 +1103,45 @@ impl<'p> Run<'p> {
         }
         recorder.recording = true;
     }
+}
+
+/// The first work list of [`ImproveRegion::Around`]: the seeds' vertices and, when
+/// `degraded`, those of every triangle with an edge outside `lo..=hi` or an angle below
+/// [`ImproveParams::seed_min_angle_deg`]; increasing, each once.
+pub(crate) fn initial_work(
+    mesh: &LabeledMesh,
+    params: &ImproveParams,
+    (lo, hi): (f64, f64),
+    seeds: &[TriId],
+    degraded: bool,
+) -> Vec<VertexId> {
+    let min_angle = params.seed_min_angle_deg.to_radians();
+    let alive = mesh.tri_alive_flags();
+    let mut work: Vec<VertexId> = seeds
+        .iter()
+        .filter(|t| alive.get(t.idx()).copied().unwrap_or(false))
+        .flat_map(|&t| mesh.tri(t))
+        .collect();
+    if degraded {
+        work.par_extend(
+            (0..mesh.triangle_capacity())
+                .into_par_iter()
+                .with_min_len(1024)
+                .filter(|&t| alive[t])
+                .flat_map_iter(|t| {
+                    let t = TriId::new(t as u32);
+                    let p = mesh.tri_positions(t);
+                    let out = (0..3).any(|k| {
+                        let l = p[k].distance(p[(k + 1) % 3]);
+                        !(lo..=hi).contains(&l)
+                    }) || crate::geometry::triangle_min_angle(&p) < min_angle;
+                    out.then(|| mesh.tri(t)).into_iter().flatten()
+                }),
+        );
+    }
+    work.par_sort_unstable();
+    work.dedup();
+    work
 }
 
 #[cfg(test)]

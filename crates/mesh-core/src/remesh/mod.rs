@@ -12,16 +12,20 @@
 //! - [`split`], [`flip`], [`collapse`], [`smooth`]: the mesh-improvement operations
 //!   (El Topo §3.5–3.6);
 //! - [`improve()`]: the driver that sweeps them to keep edge lengths in range;
+//! - [`blocks`]: the same driver on blocks of space, on every core;
+//! - [`fence`]: [`FenceGuard`], improvement restricted to part of the mesh;
 //! - [`structure`]: the structural check every edit passes before it commits;
 //! - [`snap`]: vertex snapping and splits at given points (Los Topos §7.1 merging).
 //!
 //! `fixtures` (tests only) holds hand-built scenes shared with `tests/remesh_topology.rs`.
 
 pub mod attributes;
+pub mod blocks;
 pub mod collapse;
 pub mod degenerate;
 pub mod edit;
 pub mod features;
+pub mod fence;
 #[cfg(test)]
 mod fixtures;
 pub mod flip;
@@ -36,6 +40,7 @@ pub mod split;
 pub mod structure;
 
 pub use attributes::{Blend, VertexAttributes};
+pub use blocks::{BlockParams, improve_in_blocks};
 pub use collapse::{
     CollapseError, CollapseParams, CollapsePlacement, CollapseRefusal, collapse_edge,
 };
@@ -48,6 +53,7 @@ pub use features::{
     FeatureParams, VertexKind, classify_vertex, classify_vertices, max_label_volume_change,
     normal_cos, normals_agree,
 };
+pub use fence::FenceGuard;
 pub use flip::{FlipCriterion, FlipError, FlipParams, FlipRefusal, flip_edge};
 pub use guard::{EditGuard, NoGuard, StaticIntersectionGuard, Veto, bisect_moves};
 pub use improve::{
