@@ -11,7 +11,7 @@ use std::fmt;
 use std::sync::Arc;
 
 use glam::{DMat3, DVec3};
-use mesh_core::remesh::ConserveVolume;
+use mesh_core::remesh::{BlockParams, ConserveVolume};
 use serde::{Deserialize, Serialize};
 
 /// The velocity gradient `∂u_i/∂x_j` (row `i`, column `j`) of an ambient flow at a point.
@@ -134,6 +134,11 @@ pub struct CollisionParams {
     /// cost 1.7× the time of 2 for the same triangle quality; smoothing moves every vertex
     /// once per sweep, and each move is a CCD-checked edit.)
     pub improve_sweeps: usize,
+    /// Improvement on every core, by blocks of space, when the mesh has at least
+    /// `min_work` vertices (`mesh_core::remesh::blocks`; each block gets its own collision
+    /// guard, and blocks keep the guard's minimum distance from each other's edits).
+    /// Default [`BlockParams::default`]; `passes = 0` keeps it serial.
+    pub improve_blocks: BlockParams,
     /// Bound on time-step halvings in collision resolution before the step fails.
     /// Default 6 (1/64 of the step).
     pub max_halvings: u32,
@@ -192,6 +197,7 @@ impl Default for CollisionParams {
                 smoothing: false,
             },
             improve_sweeps: 2,
+            improve_blocks: BlockParams::default(),
             max_halvings: 6,
             max_displacement_factor: Some(8.0),
             validation: StepValidation::Structure,

@@ -40,7 +40,10 @@
 use std::time::Instant;
 
 use glam::DVec3;
-use mesh_core::remesh::{ImproveParams, ImproveReport, VertexAttributes, improve};
+use mesh_core::remesh::{
+    BlockParams, EditGuard, ImproveParams, ImproveRegion, ImproveReport, VertexAttributes,
+    improve_in_blocks,
+};
 use mesh_core::validate::{ValidateOptions, validate};
 use mesh_core::{LabeledMesh, RegionCensus, StepReport, TrackError, VertexId, check_proposal};
 use rayon::prelude::*;
@@ -59,6 +62,8 @@ pub(crate) struct StepConfig {
     pub resolve: ResolveOptions,
     pub merge: Option<MergeOptions>,
     pub improve: ImproveParams,
+    /// Improvement by blocks; its margin is `min_separation`.
+    pub improve_blocks: BlockParams,
     pub t1t2: T1T2Options,
     pub validation: StepValidation,
     /// Largest displacement allowed in one step (absolute), if bounded.
@@ -153,7 +158,21 @@ pub(crate) fn advance_mesh(
 
     if config.improve.split || config.improve.collapse || config.improve.flip {
         let clock = Instant::now();
-        let improved = improve(&mut work, &config.improve, &mut motion, &mut guard);
+        // Each block (and the serial pass after them) gets a guard of its own, with the
+        // minimum distance; the step's guard then no longer knows the mesh.
+        let options = *guard.options();
+        let make_guard =
+            move || -> Box<dyn EditGuard> { Box::new(CollisionGuard::with_options(options)) };
+        let improved = improve_in_blocks(
+            &mut work,
+            &config.improve,
+            ImproveRegion::Whole,
+            None,
+            &mut motion,
+            &config.improve_blocks,
+            &make_guard,
+        );
+        guard.reset();
         count_improvement(&improved, &mut report);
         report.time_stage("improve", clock.elapsed());
         budget("improve")?;

@@ -9,7 +9,7 @@
 
 use glam::DVec3;
 use mesh_core::remesh::improve::mean_edge_length;
-use mesh_core::remesh::{ImproveParams, SeparationParams, ThinRegionParams};
+use mesh_core::remesh::{BlockParams, ImproveParams, SeparationParams, ThinRegionParams};
 use mesh_core::validate::{ValidateOptions, validate};
 use mesh_core::{LabeledMesh, RegionCensus, StepReport, SurfaceTracker, TrackError, VertexId};
 
@@ -170,17 +170,22 @@ fn configure(params: &CollisionParams, l: f64) -> StepConfig {
         separation: SeparationParams::default(),
         ambient_flow: params.ambient_flow.clone(),
     };
+    // Far below the repulsion distance (10⁻³ ℓ), far above rounding.
+    let min_separation = 1e-6 * l;
     StepConfig {
         resolve,
         merge,
         improve,
+        improve_blocks: BlockParams {
+            margin: min_separation,
+            ..params.improve_blocks.clone()
+        },
         t1t2,
         validation: params.validation,
         max_displacement: params.max_displacement_factor.map(|f| f * l),
         time_budget: params.time_budget,
         collision_safety: params.collision_safety,
-        // Far below the repulsion distance (10⁻³ ℓ), far above rounding.
-        min_separation: 1e-6 * l,
+        min_separation,
         region_thickness: REGION_THICKNESS_FACTOR * l,
         relax: RelaxOptions {
             passes: if params.improve {

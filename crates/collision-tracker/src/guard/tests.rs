@@ -531,3 +531,69 @@ fn separation_and_pinching_pass_the_guard() {
     assert_eq!(m.num_vertices(), 8);
     assert!(validate(&m, &ValidateOptions::with_intersections()).is_valid());
 }
+
+/// Improvement by blocks under the collision guard, with a block border running through
+/// the gap between two close spheres (refined to half their edge length, so hundreds of
+/// splits and moves happen next to the border): the result is exactly intersection-free
+/// and no vertex of one sphere comes closer than the guard's minimum distance to a
+/// triangle of the other. (This scene does not push the two sides towards each other, so
+/// it passes with a zero margin too; what the margin adds is argued in `blocks`' doc.)
+#[test]
+fn blocks_next_to_a_close_surface_stay_intersection_free_and_apart() {
+    use crate::proximity::proximity_vertex_triangle;
+    use mesh_core::remesh::{BlockParams, ImproveRegion, improve_in_blocks};
+
+    let (gap, d) = (0.02, 0.01);
+    let c = 1.0 + 0.5 * gap;
+    let mesh = union(&[
+        sphere(3, DVec3::new(-c, 0.0, 0.0), 1.0, [0, 1]),
+        sphere(3, DVec3::new(c, 0.0, 0.0), 1.0, [0, 2]),
+    ]);
+    let params = ImproveParams {
+        target_edge_length: Some(0.08),
+        max_sweeps: 2,
+        ..ImproveParams::default()
+    };
+    // Blocks of 0.32: the lattice starts at x = −2.24, so a border lies at x = 0, in the
+    // gap.
+    let blocks = BlockParams {
+        block_edges: 4.0,
+        min_work: 0,
+        margin: d,
+        ..BlockParams::default()
+    };
+    let options = CollisionGuardOptions {
+        min_distance: Some(d),
+        ..CollisionGuardOptions::default()
+    };
+    let make_guard =
+        move || -> Box<dyn EditGuard> { Box::new(CollisionGuard::with_options(options)) };
+    let mut m = mesh.clone();
+    let r = improve_in_blocks(
+        &mut m,
+        &params,
+        ImproveRegion::Whole,
+        None,
+        &mut VertexAttributes::none(),
+        &blocks,
+        &make_guard,
+    );
+    assert!(r.blocks > 10 && r.split.done > 100, "{r:?}");
+    let v = validate(&m, &ValidateOptions::with_intersections());
+    assert!(v.is_valid(), "{v:?}");
+    // Vertices near the gap against the other sphere's triangles near it.
+    let near = |t: TriId| m.tri_positions(t).iter().all(|p| p.x.abs() < 0.3);
+    let side = |t: TriId| m.labels(t)[1].raw();
+    let mut closest = f64::INFINITY;
+    for t in m.triangles().filter(|&t| near(t)) {
+        for u in m.triangles().filter(|&u| near(u) && side(u) != side(t)) {
+            for p in m.tri_positions(u) {
+                closest = closest.min(proximity_vertex_triangle(p, m.tri_positions(t)).distance);
+            }
+        }
+    }
+    assert!(
+        closest >= d * (1.0 - 1e-9),
+        "a vertex {closest} from the other sphere"
+    );
+}

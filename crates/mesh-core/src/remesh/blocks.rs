@@ -63,6 +63,13 @@ pub struct BlockParams {
     /// A pass runs on blocks only when its work list has at least this many vertices;
     /// below, copying blocks out costs more than the cores save. Default 1024.
     pub min_work: usize,
+    /// Distance that edits on the two sides of a border must keep from each other: each
+    /// block may change only what lies at least `margin / 2` inside its box, and copies
+    /// out everything within `margin` of it. Default 0, enough for an intersection
+    /// guard; a guard that refuses elements closer than `d` (the collision guard's
+    /// minimum distance) needs `d`, or two blocks could each place an element `d / 2`
+    /// from their shared face without either seeing the other's.
+    pub margin: f64,
 }
 
 impl Default for BlockParams {
@@ -71,6 +78,7 @@ impl Default for BlockParams {
             passes: 2,
             block_edges: 24.0,
             min_work: 1024,
+            margin: 0.0,
         }
     }
 }
@@ -105,13 +113,15 @@ pub fn improve_in_blocks(
         ..params.clone()
     };
     let side = blocks.block_edges * target;
+    let margin = blocks.margin.max(0.0);
     let mut report = ImproveReport {
         converged: true,
         ..Default::default()
     };
     let mut left: Option<Vec<VertexId>> = None;
     for pass in 0..blocks.passes {
-        if !(side.is_finite() && side > 0.0) {
+        // A margin of half a side or more leaves a block nothing it may change.
+        if !(side.is_finite() && side > 0.0 && margin.is_finite() && 2.0 * margin < side) {
             break;
         }
         let work = match &left {
@@ -130,7 +140,7 @@ pub fn improve_in_blocks(
             &work,
             &mut editable,
             attrs,
-            (side, shift),
+            (side, shift, margin),
             make_guard,
         );
         tracing::debug!(
@@ -224,7 +234,8 @@ impl Lattice {
     }
 }
 
-/// One block's job: its box, the triangles it copies out and its work, all global ids in
+/// One block's job: the box its edits must stay strictly inside (its lattice box shrunk
+/// by half the margin), the triangles it copies out and its work, all global ids in
 /// increasing order.
 struct Block {
     bounds: Aabb,
@@ -258,7 +269,7 @@ fn block_pass(
     work: &[VertexId],
     editable: &mut Option<Vec<bool>>,
     attrs: &mut VertexAttributes,
-    (side, shift): (f64, f64),
+    (side, shift, margin): (f64, f64, f64),
     make_guard: &(dyn Fn() -> Box<dyn EditGuard> + Sync),
 ) -> (ImproveReport, Vec<VertexId>) {
     let low = mesh
@@ -268,7 +279,7 @@ fn block_pass(
         origin: (low / side).floor() * side - DVec3::splat(shift),
         side,
     };
-    let blocks = cut_into_blocks(mesh, work, &lattice);
+    let blocks = cut_into_blocks(mesh, work, &lattice, margin);
     let improved: Vec<Improved> = blocks
         .par_iter()
         .map(|b| improve_block(mesh, attrs, editable.as_deref(), b, params, make_guard))
@@ -289,11 +300,16 @@ fn block_pass(
     (report, next)
 }
 
-/// The blocks that hold work, in key order, each with every triangle whose box meets its
-/// box (boxes grown by a millionth of a side, so that rounding in the keys can only add
-/// triangles: an extra one is fenced and harmless, a missing one could hide an
-/// intersection).
-fn cut_into_blocks(mesh: &LabeledMesh, work: &[VertexId], lattice: &Lattice) -> Vec<Block> {
+/// The blocks that hold work, in key order, each with every triangle whose box comes
+/// within `margin` of its lattice box (boxes grown by a further millionth of a side, so
+/// that rounding in the keys can only add triangles: an extra one is fenced and harmless,
+/// a missing one could hide an intersection).
+fn cut_into_blocks(
+    mesh: &LabeledMesh,
+    work: &[VertexId],
+    lattice: &Lattice,
+    margin: f64,
+) -> Vec<Block> {
     let mut keyed: Vec<(Key, VertexId)> = work
         .iter()
         .map(|&v| (lattice.key(mesh.position(v)), v))
@@ -303,8 +319,9 @@ fn cut_into_blocks(mesh: &LabeledMesh, work: &[VertexId], lattice: &Lattice) -> 
     let mut index: HashMap<Key, usize> = HashMap::new();
     for (k, v) in keyed {
         let i = *index.entry(k).or_insert_with(|| {
+            let b = lattice.bounds(k);
             blocks.push(Block {
-                bounds: lattice.bounds(k),
+                bounds: Aabb::new(b.min + 0.5 * margin, b.max - 0.5 * margin),
                 tris: Vec::new(),
                 work: Vec::new(),
             });
@@ -312,7 +329,7 @@ fn cut_into_blocks(mesh: &LabeledMesh, work: &[VertexId], lattice: &Lattice) -> 
         });
         blocks[i].work.push(v);
     }
-    let slack = 1e-6 * lattice.side;
+    let slack = 1e-6 * lattice.side + margin;
     for t in mesh.triangles() {
         let b = Aabb::from_points(&mesh.tri_positions(t)).inflated(slack);
         let (lo, hi) = (lattice.key(b.min), lattice.key(b.max));
