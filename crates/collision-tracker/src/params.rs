@@ -134,9 +134,10 @@ pub struct CollisionParams {
     /// cost 1.7× the time of 2 for the same triangle quality; smoothing moves every vertex
     /// once per sweep, and each move is a CCD-checked edit.)
     pub improve_sweeps: usize,
-    /// Improvement on every core, by blocks of space, when the mesh has at least
-    /// `min_work` vertices (`mesh_core::remesh::blocks`; each block gets its own collision
-    /// guard, and blocks keep the guard's minimum distance from each other's edits).
+    /// Improvement and wall relaxation on every core, by blocks of space, when they have
+    /// at least `min_work` vertices to work on (`mesh_core::remesh::blocks`; each block
+    /// gets its own collision guard, and blocks keep the guard's minimum distance from each
+    /// other's edits).
     /// Default [`BlockParams::default`]; `passes = 0` keeps it serial.
     pub improve_blocks: BlockParams,
     /// Bound on time-step halvings in collision resolution before the step fails.

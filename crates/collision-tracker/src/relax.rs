@@ -14,7 +14,9 @@
 //!         volume change exceed Ω
 //!     the moves of a pass computed from one snapshot (in parallel) and committed by
 //!     mesh-core's batched smoothing commit: independent sets of moves, each set one
-//!     guarded pseudo-motion, offenders retried alone
+//!     guarded pseudo-motion, offenders retried alone; on large walls the commit runs on
+//!     blocks of space on every core (mesh-core's `run_in_blocks`, each block with its
+//!     own collision guard), the moves a border held back committed serially after
 //! ```
 //!
 //! **Why.** Improvement's null-space smoothing keeps sharp features, so the creases of a
@@ -39,15 +41,24 @@
 
 use glam::DVec3;
 use mesh_core::remesh::smooth::laplacian_displacement;
-use mesh_core::remesh::{EditGuard, Proposal, SmoothParams, VertexAttributes, commit_moves};
+use mesh_core::remesh::{
+    BlockJob, BlockParams, EditGuard, Proposal, SmoothOutcome, SmoothParams, VertexAttributes,
+    commit_moves, run_in_blocks,
+};
 use mesh_core::{Label, LabeledMesh, VertexId};
 use rayon::prelude::*;
 
+use crate::guard::CollisionGuard;
+
 /// Options of [`relax_walls`].
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub(crate) struct RelaxOptions {
     /// Passes per step. 0 turns the stage off.
     pub passes: usize,
+    /// The commit by blocks (the improvement stage's, with its margin), and the block
+    /// side.
+    pub blocks: BlockParams,
+    pub block_side: f64,
     /// Fraction of the Laplacian applied per pass (0.5: monotone on regular patches).
     pub step: f64,
     /// Ω: the largest change of any label's volume one move may cause.
@@ -63,11 +74,13 @@ pub(crate) struct RelaxReport {
     pub refused: usize,
 }
 
-/// Runs the stage (see the module doc).
+/// Runs the stage (see the module doc). `guard` checks the serial commits; blocks get
+/// guards of their own with its options, and `guard` is reset after them (it no longer
+/// knows the mesh).
 pub(crate) fn relax_walls(
     mesh: &mut LabeledMesh,
     attrs: &mut VertexAttributes,
-    guard: &mut dyn EditGuard,
+    guard: &mut CollisionGuard,
     options: &RelaxOptions,
 ) -> RelaxReport {
     let mut report = RelaxReport::default();
@@ -96,7 +109,7 @@ pub(crate) fn relax_walls(
                 })
             })
             .collect();
-        let out = commit_moves(mesh, attrs, guard, &checks, &proposals);
+        let out = commit(mesh, attrs, guard, &checks, &proposals, options);
         report.moved += out.moved;
         report.refused += out.refused + out.vetoed;
         if out.moved == 0 {
@@ -104,6 +117,61 @@ pub(crate) fn relax_walls(
         }
     }
     report
+}
+
+/// Commits one pass's proposals (increasing vertex order): by blocks where there are
+/// enough of them, then serially what the blocks' borders held back.
+fn commit(
+    mesh: &mut LabeledMesh,
+    attrs: &mut VertexAttributes,
+    guard: &mut CollisionGuard,
+    checks: &SmoothParams,
+    proposals: &[Proposal],
+    options: &RelaxOptions,
+) -> SmoothOutcome {
+    let of = |v: VertexId| {
+        proposals
+            .binary_search_by_key(&v, |p| p.vertex)
+            .ok()
+            .map(|i| proposals[i])
+    };
+    let stage = |job: BlockJob<'_>| {
+        let local: Vec<Proposal> = job
+            .work
+            .iter()
+            .filter_map(|&v| of(job.globals[v.idx()]).map(|p| Proposal { vertex: v, ..p }))
+            .collect();
+        let out = commit_moves(job.mesh, job.attrs, job.guard, checks, &local);
+        let moved = out.moved;
+        (out, moved)
+    };
+    let guard_options = *guard.options();
+    let make_guard =
+        move || -> Box<dyn EditGuard> { Box::new(CollisionGuard::with_options(guard_options)) };
+    let work: Vec<VertexId> = proposals.iter().map(|p| p.vertex).collect();
+    let (outs, left) = run_in_blocks(
+        mesh,
+        attrs,
+        &mut None,
+        work,
+        options.block_side,
+        &options.blocks,
+        &make_guard,
+        &stage,
+    );
+    let mut total = SmoothOutcome::default();
+    if !outs.is_empty() {
+        guard.reset();
+    }
+    let rest: Vec<Proposal> = left.into_iter().filter_map(of).collect();
+    let last = commit_moves(mesh, attrs, guard, checks, &rest);
+    for out in outs.iter().chain([&last]) {
+        total.moved += out.moved;
+        total.refused += out.refused;
+        total.vetoed += out.vetoed;
+        total.volume_change += out.volume_change;
+    }
+    total
 }
 
 /// Where relaxation moves `v`, or `None` when `v` is neither a wall nor a curve vertex.

@@ -172,14 +172,15 @@ fn configure(params: &CollisionParams, l: f64) -> StepConfig {
     };
     // Far below the repulsion distance (10⁻³ ℓ), far above rounding.
     let min_separation = 1e-6 * l;
+    let improve_blocks = BlockParams {
+        margin: min_separation,
+        ..params.improve_blocks.clone()
+    };
     StepConfig {
         resolve,
         merge,
         improve,
-        improve_blocks: BlockParams {
-            margin: min_separation,
-            ..params.improve_blocks.clone()
-        },
+        improve_blocks: improve_blocks.clone(),
         t1t2,
         validation: params.validation,
         max_displacement: params.max_displacement_factor.map(|f| f * l),
@@ -193,6 +194,8 @@ fn configure(params: &CollisionParams, l: f64) -> StepConfig {
             } else {
                 0
             },
+            blocks: improve_blocks.clone(),
+            block_side: improve_blocks.block_edges * l,
             step: 0.5,
             max_volume_change: params.max_volume_change.unwrap_or(0.1 * l * l * l),
             min_move: 1e-3 * l,

@@ -491,6 +491,21 @@ fn time_budget_and_scale_are_typed_errors() {
 /// the plane x = 0): no fins tilted away from it, no pockets of the outside trapped in it.
 #[test]
 fn pressed_spheres_merge_once_and_share_a_flat_wall() {
+    pressed_spheres(CollisionParams::default());
+}
+
+/// The same with improvement and wall relaxation on small blocks from the first vertex of
+/// work: many blocks and borders across the wall and its rim, every frame still free of
+/// intersections (checked exactly) and the wall as flat.
+#[test]
+fn pressed_spheres_on_blocks_keep_a_clean_flat_wall() {
+    let mut params = CollisionParams::default();
+    params.improve_blocks.min_work = 1;
+    params.improve_blocks.block_edges = 6.0;
+    pressed_spheres(params);
+}
+
+fn pressed_spheres(params: CollisionParams) {
     let mesh = two_spheres([1, 2], 0.04, 2);
     // Sphere 2 turned about the x axis, so that the two meshes do not mirror each other
     // across the wall and the snaps trap pockets between the sheets.
@@ -500,7 +515,7 @@ fn pressed_spheres_merge_once_and_share_a_flat_wall() {
         *q = turn * *q;
     }
     let mesh = LabeledMesh::from_raw(p, &tris, &labels).unwrap();
-    let mut t = tracker(mesh, CollisionParams::default());
+    let mut t = tracker(mesh, params);
     let reports = run(t.as_mut(), 24, |m, _| expand_into_outside(m, 0.03));
     let merges: u64 = reports.iter().map(|r| r.events.merges).sum();
     let splits: u64 = reports.iter().map(|r| r.events.splits).sum();

@@ -1,4 +1,6 @@
-//! [`improve_in_blocks`]: mesh improvement on every core, by blocks of space.
+//! [`improve_in_blocks`]: mesh improvement on every core, by blocks of space; and
+//! [`run_in_blocks`], the same for any stage whose edits go through an [`EditGuard`] (the
+//! collision backend's wall relaxation).
 //!
 //! Why: [`improve_in`] commits its edits one at a time, each checked against the mesh as it
 //! stands, so it runs on one core; on large changed regions (`fix` of scanned meshes, a
@@ -72,6 +74,19 @@ pub struct BlockParams {
     pub margin: f64,
 }
 
+impl BlockParams {
+    /// True when blocks of side `side` can run at all: at least one pass, a usable side,
+    /// and a margin that leaves a block something it may change (under half a side).
+    pub fn runs(&self, side: f64) -> bool {
+        let margin = self.margin.max(0.0);
+        self.passes > 0
+            && side.is_finite()
+            && side > 0.0
+            && margin.is_finite()
+            && 2.0 * margin < side
+    }
+}
+
 impl Default for BlockParams {
     fn default() -> Self {
         Self {
@@ -112,49 +127,43 @@ pub fn improve_in_blocks(
         ),
         ..params.clone()
     };
-    let side = blocks.block_edges * target;
-    let margin = blocks.margin.max(0.0);
     let mut report = ImproveReport {
         converged: true,
         ..Default::default()
     };
+    let side = blocks.block_edges * target;
+    // The serial pass's work: what the block passes left, or the region when none ran.
     let mut left: Option<Vec<VertexId>> = None;
-    for pass in 0..blocks.passes {
-        // A margin of half a side or more leaves a block nothing it may change.
-        if !(side.is_finite() && side > 0.0 && margin.is_finite() && 2.0 * margin < side) {
-            break;
-        }
-        let work = match &left {
-            Some(w) => w.clone(),
-            None => first_work(mesh, &params, target, region),
+    if blocks.runs(side) {
+        let stage = |job: BlockJob<'_>| {
+            let r = improve_in(
+                job.mesh,
+                &params,
+                ImproveRegion::Vertices(job.work),
+                job.attrs,
+                job.guard,
+                &AreaDecrease,
+            );
+            let edits = r.edits();
+            (r, edits)
         };
-        if work.len() < blocks.min_work {
-            left = Some(work);
-            break;
-        }
-        let shift = if pass % 2 == 0 { 0.0 } else { 0.5 * side };
-        let t0 = std::time::Instant::now();
-        let (r, next) = block_pass(
+        let work = first_work(mesh, &params, target, region);
+        let (reports, rest) = run_in_blocks(
             mesh,
-            &params,
-            &work,
-            &mut editable,
             attrs,
-            (side, shift, margin),
+            &mut editable,
+            work,
+            side,
+            blocks,
             make_guard,
+            &stage,
         );
-        tracing::debug!(
-            pass,
-            work = work.len(),
-            left = next.len(),
-            edits = r.edits(),
-            seconds = t0.elapsed().as_secs_f64(),
-            "improve: block pass"
-        );
-        report.absorb(&r);
-        left = Some(next);
+        report.blocks = reports.len();
+        for r in &reports {
+            report.absorb(r);
+        }
+        left = Some(rest);
     }
-    // The serial pass: what the block passes left, or everything when none ran.
     let region = match &left {
         Some(w) => ImproveRegion::Vertices(w),
         None => region,
@@ -243,8 +252,82 @@ struct Block {
     work: Vec<VertexId>,
 }
 
-/// A block after improvement, with what write-back needs to map it onto the mesh.
-struct Improved {
+/// What a stage gets to work on in one block: the block's own copy of its part of the
+/// mesh (local ids), the attributes, the work (local ids, increasing), the global id of
+/// every copied vertex (`globals[i]` is local vertex `i`; vertices a stage creates have
+/// none) and the block's fenced guard, which every edit must go through.
+pub struct BlockJob<'a> {
+    /// The block's mesh.
+    pub mesh: &'a mut LabeledMesh,
+    /// Its vertices' attributes.
+    pub attrs: &'a mut VertexAttributes,
+    /// The vertices to work on.
+    pub work: &'a [VertexId],
+    /// Global id of each copied vertex.
+    pub globals: &'a [VertexId],
+    /// The block's guard: the caller's, behind the block's fence.
+    pub guard: &'a mut dyn EditGuard,
+}
+
+/// Runs `stage` on blocks of space, in parallel, pass after pass (see the module doc;
+/// every pass after the first works on blocks shifted by half a side and takes what the
+/// previous one's borders held back), and writes every block back in a fixed order.
+/// `stage` returns its report and the number of edits it committed.
+///
+/// Returns the blocks' reports in write-back order, and the work left for the caller's
+/// serial pass: what the last pass's borders held back, or all of `work` when it has fewer
+/// than [`BlockParams::min_work`] vertices (or [`BlockParams::runs`] is false). `editable`
+/// is the caller's fence, as in [`improve_in_blocks`]; triangles the blocks create are
+/// added to it.
+#[allow(clippy::too_many_arguments)]
+pub fn run_in_blocks<R: Send>(
+    mesh: &mut LabeledMesh,
+    attrs: &mut VertexAttributes,
+    editable: &mut Option<Vec<bool>>,
+    mut work: Vec<VertexId>,
+    side: f64,
+    blocks: &BlockParams,
+    make_guard: &(dyn Fn() -> Box<dyn EditGuard> + Sync),
+    stage: &(dyn Fn(BlockJob<'_>) -> (R, usize) + Sync),
+) -> (Vec<R>, Vec<VertexId>) {
+    let mut reports = Vec::new();
+    if !blocks.runs(side) {
+        return (reports, work);
+    }
+    let margin = blocks.margin.max(0.0);
+    for pass in 0..blocks.passes {
+        if work.len() < blocks.min_work {
+            break;
+        }
+        let shift = if pass % 2 == 0 { 0.0 } else { 0.5 * side };
+        let t0 = std::time::Instant::now();
+        let before = reports.len();
+        let (edits, next) = block_pass(
+            mesh,
+            &work,
+            editable,
+            attrs,
+            (side, shift, margin),
+            make_guard,
+            stage,
+            &mut reports,
+        );
+        tracing::debug!(
+            pass,
+            blocks = reports.len() - before,
+            work = work.len(),
+            left = next.len(),
+            edits,
+            seconds = t0.elapsed().as_secs_f64(),
+            "blocks: pass"
+        );
+        work = next;
+    }
+    (reports, work)
+}
+
+/// A block after its stage ran, with what write-back needs to map it onto the mesh.
+struct Worked {
     /// Global id of each vertex the block copied out (its local id is the index).
     verts: Vec<VertexId>,
     /// Global id of each triangle it copied out (likewise).
@@ -257,21 +340,25 @@ struct Improved {
     attrs: VertexAttributes,
     /// Local ids of the vertices of edits refused only because of the border.
     deferred: Vec<VertexId>,
-    report: ImproveReport,
+    /// Edits the stage committed.
+    edits: usize,
 }
 
-/// One pass over the blocks of a lattice shifted by `shift`: every block with work is
-/// improved in parallel, then written back in block order. Returns the summed report and
-/// the next pass's work (global ids of what the borders held back).
-fn block_pass(
+/// One pass over the blocks of a lattice shifted by `shift`: the stage runs on every block
+/// with work in parallel, then the blocks are written back in block order and their
+/// reports appended to `reports`. Returns the edits and the next pass's work (global ids
+/// of what the borders held back).
+#[allow(clippy::too_many_arguments)]
+fn block_pass<R: Send>(
     mesh: &mut LabeledMesh,
-    params: &ImproveParams,
     work: &[VertexId],
     editable: &mut Option<Vec<bool>>,
     attrs: &mut VertexAttributes,
     (side, shift, margin): (f64, f64, f64),
     make_guard: &(dyn Fn() -> Box<dyn EditGuard> + Sync),
-) -> (ImproveReport, Vec<VertexId>) {
+    stage: &(dyn Fn(BlockJob<'_>) -> (R, usize) + Sync),
+    reports: &mut Vec<R>,
+) -> (usize, Vec<VertexId>) {
     let low = mesh
         .vertices()
         .fold(DVec3::INFINITY, |m, v| m.min(mesh.position(v)));
@@ -280,24 +367,21 @@ fn block_pass(
         side,
     };
     let blocks = cut_into_blocks(mesh, work, &lattice, margin);
-    let improved: Vec<Improved> = blocks
+    let worked: Vec<(Worked, R)> = blocks
         .par_iter()
-        .map(|b| improve_block(mesh, attrs, editable.as_deref(), b, params, make_guard))
+        .map(|b| run_block(mesh, attrs, editable.as_deref(), b, make_guard, stage))
         .collect();
-    let mut report = ImproveReport {
-        converged: true,
-        blocks: improved.len(),
-        ..Default::default()
-    };
     let mut next = Vec::new();
-    for block in improved {
-        report.absorb(&block.report);
+    let mut edits = 0;
+    for (block, report) in worked {
+        edits += block.edits;
+        reports.push(report);
         write_back(mesh, attrs, editable, block, &mut next);
     }
     next.retain(|&v| mesh.is_vertex_alive(v));
     next.sort_unstable();
     next.dedup();
-    (report, next)
+    (edits, next)
 }
 
 /// The blocks that hold work, in key order, each with every triangle whose box comes
@@ -366,15 +450,15 @@ fn strictly_inside(b: &Aabb, p: DVec3) -> bool {
         & (p.z < b.max.z)
 }
 
-/// Copies one block out and improves it.
-fn improve_block(
+/// Copies one block out and runs the stage on it.
+fn run_block<R>(
     mesh: &LabeledMesh,
     attrs: &VertexAttributes,
     region: Option<&[bool]>,
     block: &Block,
-    params: &ImproveParams,
     make_guard: &(dyn Fn() -> Box<dyn EditGuard> + Sync),
-) -> Improved {
+    stage: &(dyn Fn(BlockJob<'_>) -> (R, usize) + Sync),
+) -> (Worked, R) {
     let mut verts: Vec<VertexId> = block.tris.iter().flat_map(|&t| mesh.tri(t)).collect();
     verts.sort_unstable();
     verts.dedup();
@@ -431,16 +515,15 @@ fn improve_block(
         .collect();
     let mut inner_guard = make_guard();
     let mut fence = FenceGuard::block(inner_guard.as_mut(), editable.clone(), held, block.bounds);
-    let report = improve_in(
-        &mut sub,
-        params,
-        ImproveRegion::Vertices(&work),
-        &mut sub_attrs,
-        &mut fence,
-        &AreaDecrease,
-    );
+    let (report, edits) = stage(BlockJob {
+        mesh: &mut sub,
+        attrs: &mut sub_attrs,
+        work: &work,
+        globals: &verts,
+        guard: &mut fence,
+    });
     let deferred = fence.deferred().to_vec();
-    Improved {
+    let worked = Worked {
         verts,
         tris: block.tris.clone(),
         editable,
@@ -448,21 +531,22 @@ fn improve_block(
         mesh: sub,
         attrs: sub_attrs,
         deferred,
-        report,
-    }
+        edits,
+    };
+    (worked, report)
 }
 
-/// Writes an improved block into the mesh (the same steps as committing one edit: moves,
+/// Writes a worked block into the mesh (the same steps as committing one edit: moves,
 /// removals, new vertices, new triangles, each touched edge re-paired once, then the edges
 /// around moved vertices) and adds the global ids of its deferred vertices to `next`.
 fn write_back(
     mesh: &mut LabeledMesh,
     attrs: &mut VertexAttributes,
     editable: &mut Option<Vec<bool>>,
-    block: Improved,
+    block: Worked,
     next: &mut Vec<VertexId>,
 ) {
-    let Improved {
+    let Worked {
         verts,
         tris,
         editable: free,
@@ -470,10 +554,10 @@ fn write_back(
         mesh: sub,
         attrs: sub_attrs,
         deferred,
-        report,
+        edits,
     } = block;
     let (n_verts, n_tris) = (verts.len(), tris.len());
-    if report.edits() == 0 {
+    if edits == 0 {
         next.extend(deferred.iter().map(|v| verts[v.idx()]));
         return;
     }

@@ -40,7 +40,7 @@ pub mod split;
 pub mod structure;
 
 pub use attributes::{Blend, VertexAttributes};
-pub use blocks::{BlockParams, improve_in_blocks};
+pub use blocks::{BlockJob, BlockParams, improve_in_blocks, run_in_blocks};
 pub use collapse::{
     CollapseError, CollapseParams, CollapsePlacement, CollapseRefusal, collapse_edge,
 };
