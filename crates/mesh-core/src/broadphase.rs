@@ -117,6 +117,18 @@ impl Aabb {
             & (other.min.z <= self.max.z)
     }
 
+    /// True when `p` lies in the open box (strictly inside every face). False whenever a
+    /// coordinate is NaN. Blocks of space use it: their open boxes never overlap.
+    #[inline]
+    pub fn contains_strictly(&self, p: DVec3) -> bool {
+        (self.min.x < p.x)
+            & (p.x < self.max.x)
+            & (self.min.y < p.y)
+            & (p.y < self.max.y)
+            & (self.min.z < p.z)
+            & (p.z < self.max.z)
+    }
+
     /// Centre of the box.
     #[inline]
     pub fn center(&self) -> DVec3 {

@@ -5,16 +5,16 @@
 //! holds, quality matches serial improvement, and the mesh is the same for 1, 2 and 4
 //! threads.
 
-use std::collections::BTreeMap;
+mod common;
 
+use common::{assert_valid, assert_volumes};
 use glam::DVec3;
 use mesh_core::geometry::label_volumes;
 use mesh_core::remesh::{
     BlockParams, EditGuard, ImproveParams, ImproveRegion, ImproveReport, StaticIntersectionGuard,
     VertexAttributes, improve_in, improve_in_blocks,
 };
-use mesh_core::validate::{ValidateOptions, validate};
-use mesh_core::{Label, LabeledMesh, TriId, generators};
+use mesh_core::{LabeledMesh, TriId, generators};
 
 /// A five-cell foam in the unit cube: label walls, triple curves and the corners where
 /// they meet, all of which a block border can cut through.
@@ -41,24 +41,6 @@ fn small_blocks() -> BlockParams {
 
 fn exact() -> Box<dyn EditGuard> {
     Box::new(StaticIntersectionGuard::new())
-}
-
-fn assert_valid(mesh: &LabeledMesh, what: &str) {
-    let report = validate(mesh, &ValidateOptions::with_intersections());
-    assert!(report.is_valid(), "{what}: {report:?}");
-}
-
-/// Every label's volume moved by at most the report's bound.
-fn assert_volumes(before: &BTreeMap<Label, f64>, mesh: &LabeledMesh, r: &ImproveReport) {
-    let after = label_volumes(mesh);
-    for (l, v) in before {
-        let change = (after.get(l).copied().unwrap_or(0.0) - v).abs();
-        assert!(
-            change <= r.volume_change_bound + 1e-9,
-            "label {l}: volume change {change} > bound {}",
-            r.volume_change_bound
-        );
-    }
 }
 
 /// Improves the foam by blocks in a pool of `threads`, with the position as a 3-value

@@ -2,15 +2,17 @@
 //! result validates (with the intersection layer), edge lengths fall in range, label
 //! volumes move by no more than the per-edit bound, and triple curves keep their vertices.
 
-use std::collections::{BTreeMap, HashSet};
+mod common;
 
+use std::collections::HashSet;
+
+use common::{assert_valid, assert_volumes};
 use glam::DVec3;
 use mesh_core::geometry::label_volumes;
 use mesh_core::remesh::{
-    Applied, Edit, EditError, EditGuard, ImproveParams, ImproveReport, SplitPlacement,
-    StaticIntersectionGuard, VertexAttributes, Veto, classify_vertex, improve, split_edge,
+    Applied, Edit, EditError, EditGuard, ImproveParams, SplitPlacement, StaticIntersectionGuard,
+    VertexAttributes, Veto, classify_vertex, improve, split_edge,
 };
-use mesh_core::validate::{ValidateOptions, validate};
 use mesh_core::{Label, LabeledMesh, VertexId, generators};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -75,26 +77,6 @@ fn noisy_sphere(subdivisions: u32, amp: f64, seed: u64) -> LabeledMesh {
         m.set_position(v, p * r);
     }
     m
-}
-
-fn assert_valid(mesh: &LabeledMesh, what: &str) {
-    let report = validate(mesh, &ValidateOptions::with_intersections());
-    assert!(report.is_valid(), "{what}: {report:?}");
-}
-
-/// Every label's volume changed by at most the report's bound (which is ≤ Ω per edit).
-fn assert_volumes(before: &BTreeMap<Label, f64>, mesh: &LabeledMesh, r: &ImproveReport) {
-    let after = label_volumes(mesh);
-    let edits = r.flip.done + r.collapse.done + r.smooth.done + r.split.done;
-    assert!(r.volume_change_bound <= r.max_volume_change * edits as f64 + 1e-12);
-    for (l, v) in before {
-        let change = (after.get(l).copied().unwrap_or(0.0) - v).abs();
-        assert!(
-            change <= r.volume_change_bound + 1e-9,
-            "label {l}: volume change {change} > bound {}",
-            r.volume_change_bound
-        );
-    }
 }
 
 #[test]

@@ -441,15 +441,6 @@ fn cut_into_blocks(
     blocks
 }
 
-fn strictly_inside(b: &Aabb, p: DVec3) -> bool {
-    (b.min.x < p.x)
-        & (p.x < b.max.x)
-        & (b.min.y < p.y)
-        & (p.y < b.max.y)
-        & (b.min.z < p.z)
-        & (p.z < b.max.z)
-}
-
 /// Copies one block out and runs the stage on it.
 fn run_block<R>(
     mesh: &LabeledMesh,
@@ -479,7 +470,7 @@ fn run_block<R>(
         .collect();
     let inner: Vec<bool> = positions
         .iter()
-        .map(|&p| strictly_inside(&block.bounds, p))
+        .map(|&p| block.bounds.contains_strictly(p))
         .collect();
     let in_region = |t: TriId| region.is_none_or(|r| r.get(t.idx()).copied().unwrap_or(false));
     let all_inner: Vec<bool> = tris

@@ -99,14 +99,7 @@ impl<'g> FenceGuard<'g> {
     }
 
     fn inside(&self, p: glam::DVec3) -> bool {
-        self.bounds.is_none_or(|b| {
-            (b.min.x < p.x)
-                & (p.x < b.max.x)
-                & (b.min.y < p.y)
-                & (p.y < b.max.y)
-                & (b.min.z < p.z)
-                & (p.z < b.max.z)
-        })
+        self.bounds.is_none_or(|b| b.contains_strictly(p))
     }
 
     /// Why `edit` is fenced off, if it is: the first fenced triangle it removes or deforms,
