@@ -42,8 +42,8 @@
 use glam::DVec3;
 use mesh_core::remesh::smooth::laplacian_displacement;
 use mesh_core::remesh::{
-    BlockJob, BlockParams, EditGuard, Proposal, SmoothOutcome, SmoothParams, VertexAttributes,
-    commit_moves, run_in_blocks,
+    BlockJob, BlockParams, Proposal, SmoothOutcome, SmoothParams, VertexAttributes, commit_moves,
+    run_in_blocks,
 };
 use mesh_core::{Label, LabeledMesh, VertexId};
 use rayon::prelude::*;
@@ -51,13 +51,12 @@ use rayon::prelude::*;
 use crate::guard::CollisionGuard;
 
 /// Options of [`relax_walls`].
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct RelaxOptions {
     /// Passes per step. 0 turns the stage off.
     pub passes: usize,
-    /// The commit by blocks (the improvement stage's, with its margin), and the block
-    /// side.
-    pub blocks: BlockParams,
+    /// Side of the blocks the commit runs on (`block_edges · ℓ` of the blocks passed to
+    /// [`relax_walls`]).
     pub block_side: f64,
     /// Fraction of the Laplacian applied per pass (0.5: monotone on regular patches).
     pub step: f64,
@@ -74,14 +73,15 @@ pub(crate) struct RelaxReport {
     pub refused: usize,
 }
 
-/// Runs the stage (see the module doc). `guard` checks the serial commits; blocks get
-/// guards of their own with its options, and `guard` is reset after them (it no longer
-/// knows the mesh).
+/// Runs the stage (see the module doc). `guard` checks the serial commits; on `blocks`
+/// (the improvement stage's, with its margin) each block gets a guard of its own with its
+/// options, and `guard` is reset after them (it no longer knows the mesh).
 pub(crate) fn relax_walls(
     mesh: &mut LabeledMesh,
     attrs: &mut VertexAttributes,
     guard: &mut CollisionGuard,
     options: &RelaxOptions,
+    blocks: &BlockParams,
 ) -> RelaxReport {
     let mut report = RelaxReport::default();
     let checks = SmoothParams {
@@ -109,7 +109,15 @@ pub(crate) fn relax_walls(
                 })
             })
             .collect();
-        let out = commit(mesh, attrs, guard, &checks, &proposals, options);
+        let out = commit(
+            mesh,
+            attrs,
+            guard,
+            &checks,
+            &proposals,
+            options.block_side,
+            blocks,
+        );
         report.moved += out.moved;
         report.refused += out.refused + out.vetoed;
         if out.moved == 0 {
@@ -127,7 +135,8 @@ fn commit(
     guard: &mut CollisionGuard,
     checks: &SmoothParams,
     proposals: &[Proposal],
-    options: &RelaxOptions,
+    side: f64,
+    blocks: &BlockParams,
 ) -> SmoothOutcome {
     let of = |v: VertexId| {
         proposals
@@ -145,18 +154,15 @@ fn commit(
         let moved = out.moved;
         (out, moved)
     };
-    let guard_options = *guard.options();
-    let make_guard =
-        move || -> Box<dyn EditGuard> { Box::new(CollisionGuard::with_options(guard_options)) };
     let work: Vec<VertexId> = proposals.iter().map(|p| p.vertex).collect();
     let (outs, left) = run_in_blocks(
         mesh,
         attrs,
         &mut None,
         work,
-        options.block_side,
-        &options.blocks,
-        &make_guard,
+        side,
+        blocks,
+        &guard.maker(),
         &stage,
     );
     let mut total = SmoothOutcome::default();

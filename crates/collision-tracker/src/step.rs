@@ -41,8 +41,7 @@ use std::time::Instant;
 
 use glam::DVec3;
 use mesh_core::remesh::{
-    BlockParams, EditGuard, ImproveParams, ImproveRegion, ImproveReport, VertexAttributes,
-    improve_in_blocks,
+    BlockParams, ImproveParams, ImproveRegion, ImproveReport, VertexAttributes, improve_in_blocks,
 };
 use mesh_core::validate::{ValidateOptions, validate};
 use mesh_core::{LabeledMesh, RegionCensus, StepReport, TrackError, VertexId, check_proposal};
@@ -62,7 +61,7 @@ pub(crate) struct StepConfig {
     pub resolve: ResolveOptions,
     pub merge: Option<MergeOptions>,
     pub improve: ImproveParams,
-    /// Improvement by blocks; its margin is `min_separation`.
+    /// Improvement and wall relaxation by blocks; its margin is `min_separation`.
     pub improve_blocks: BlockParams,
     pub t1t2: T1T2Options,
     pub validation: StepValidation,
@@ -160,9 +159,6 @@ pub(crate) fn advance_mesh(
         let clock = Instant::now();
         // Each block (and the serial pass after them) gets a guard of its own, with the
         // minimum distance; the step's guard then no longer knows the mesh.
-        let options = *guard.options();
-        let make_guard =
-            move || -> Box<dyn EditGuard> { Box::new(CollisionGuard::with_options(options)) };
         let improved = improve_in_blocks(
             &mut work,
             &config.improve,
@@ -170,7 +166,7 @@ pub(crate) fn advance_mesh(
             None,
             &mut motion,
             &config.improve_blocks,
-            &make_guard,
+            &guard.maker(),
         );
         guard.reset();
         count_improvement(&improved, &mut report);
@@ -180,7 +176,13 @@ pub(crate) fn advance_mesh(
 
     if config.relax.passes > 0 {
         let clock = Instant::now();
-        let relaxed = relax_walls(&mut work, &mut motion, &mut guard, &config.relax);
+        let relaxed = relax_walls(
+            &mut work,
+            &mut motion,
+            &mut guard,
+            &config.relax,
+            &config.improve_blocks,
+        );
         report.events.remeshing_edits += relaxed.moved as u64;
         report.time_stage("relax", clock.elapsed());
         budget("relax")?;

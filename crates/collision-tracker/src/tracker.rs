@@ -194,7 +194,6 @@ fn configure(params: &CollisionParams, l: f64) -> StepConfig {
             } else {
                 0
             },
-            blocks: improve_blocks.clone(),
             block_side: improve_blocks.block_edges * l,
             step: 0.5,
             max_volume_change: params.max_volume_change.unwrap_or(0.1 * l * l * l),

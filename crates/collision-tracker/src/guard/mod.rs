@@ -151,6 +151,13 @@ impl CollisionGuard {
         self.end_state.reset();
     }
 
+    /// A maker of fresh guards with this guard's options, one per block of
+    /// `mesh_core::remesh::run_in_blocks` (each sees only its own block's mesh).
+    pub fn maker(&self) -> impl Fn() -> Box<dyn EditGuard> + Sync + use<> {
+        let options = self.options;
+        move || -> Box<dyn EditGuard> { Box::new(CollisionGuard::with_options(options)) }
+    }
+
     fn veto(&mut self, hit: Hit) -> Veto {
         match hit {
             Hit::VertexTriangle => {
