@@ -56,6 +56,12 @@ pub struct FixPoint {
     pub peak_rss_mib: Option<f64>,
     /// `peak_rss_mib` per million input triangles.
     pub mib_per_million_triangles: Option<f64>,
+    /// Cells of the flawed region `fix` rebuilt (its report's `flawed_cells`; absent from
+    /// records written before it was kept). Why: where the copies overlap in volume, the
+    /// region fills that volume, so it grows as the input triangles to the power 3/2, and
+    /// a stage that labels every node of it (labels) grows with it, not with the surface.
+    #[serde(default)]
+    pub flawed_cells: Option<usize>,
 }
 
 /// One `steps` point.
@@ -204,6 +210,7 @@ fn fix_point(exe: &Path, plan: &ScalingPlan, target: usize) -> anyhow::Result<Fi
         peak_rss_mib: (watched.sampled_peak_rss_bytes > 0)
             .then(|| bytes_to_mib(watched.sampled_peak_rss_bytes)),
         mib_per_million_triangles: None,
+        flawed_cells: None,
     };
     match watched.ending {
         WatchedEnding::Exited(code) => {
@@ -228,6 +235,7 @@ fn fix_point(exe: &Path, plan: &ScalingPlan, target: usize) -> anyhow::Result<Fi
                             .collect();
                     }
                     point.fix_seconds = report["seconds"].as_f64();
+                    point.flawed_cells = report["flawed_cells"].as_u64().map(|n| n as usize);
                     if let Some(mib) = record["peak_rss_mib"].as_f64() {
                         point.peak_rss_mib = Some(mib);
                     }
@@ -321,6 +329,24 @@ pub fn slopes(fix: &[FixPoint], steps: &[StepPoint], backends: &[Backend]) -> Ve
         "fix: peak memory".into(),
         ok.iter()
             .filter_map(|p| Some((p.triangles_in as f64, p.peak_rss_mib?)))
+            .collect(),
+    );
+    // The region's own growth, and the labels stage against it rather than against the
+    // surface: together they tell a stage that is slow per node from a region that grows
+    // faster than the surface (see [`FixPoint::flawed_cells`]).
+    fit(
+        "fix: flawed cells".into(),
+        ok.iter()
+            .filter_map(|p| Some((p.triangles_in as f64, p.flawed_cells? as f64)))
+            .collect(),
+    );
+    fit(
+        "fix: labels against flawed cells".into(),
+        ok.iter()
+            .filter_map(|p| {
+                let s = p.stages.iter().find(|s| s.stage == "labels")?;
+                Some((p.flawed_cells? as f64, s.seconds))
+            })
             .collect(),
     );
     for b in backends {
@@ -434,6 +460,8 @@ mod tests {
             fix_seconds: Some(s),
             peak_rss_mib: Some(n as f64 / 1000.0),
             mib_per_million_triangles: Some(1000.0),
+            // A region growing as n^1.5, labels time linear in the region.
+            flawed_cells: Some((n as f64).powf(1.5) as usize),
         };
         let fix = [
             point(1000, 1.0, true),
@@ -446,5 +474,15 @@ mod tests {
         assert!((labels.slope.unwrap() - 1.0).abs() < 1e-12);
         let memory = s.iter().find(|s| s.what == "fix: peak memory").unwrap();
         assert!((memory.slope.unwrap() - 1.0).abs() < 1e-12);
+        let cells = s.iter().find(|s| s.what == "fix: flawed cells").unwrap();
+        assert!((cells.slope.unwrap() - 1.5).abs() < 1e-4, "{cells:?}");
+        let per_cell = s
+            .iter()
+            .find(|s| s.what == "fix: labels against flawed cells")
+            .unwrap();
+        assert!(
+            (per_cell.slope.unwrap() - 2.0 / 3.0).abs() < 1e-4,
+            "{per_cell:?}"
+        );
     }
 }

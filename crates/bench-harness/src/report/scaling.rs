@@ -26,19 +26,24 @@ pub fn scaling_markdown(record: &ScalingRecord) -> String {
             "## fix on {} rotated copies of the notched sphere\n",
             record.copies
         );
-        let _ = write!(md, "| input triangles | output triangles | ok | wall s |");
+        let _ = write!(
+            md,
+            "| input triangles | output triangles | flawed cells | ok | wall s |"
+        );
         for s in &stages {
             let _ = write!(md, " {s} s |");
         }
-        md.push_str(" peak MiB | MiB per M triangles |\n|---:|---:|---|---:|");
+        md.push_str(" peak MiB | MiB per M triangles |\n|---:|---:|---:|---|---:|");
         md.push_str(&"---:|".repeat(stages.len() + 2));
         md.push('\n');
         for p in &record.fix {
             let _ = write!(
                 md,
-                "| {} | {} | {} | {:.2} |",
+                "| {} | {} | {} | {} | {:.2} |",
                 p.triangles_in,
                 p.triangles_out,
+                p.flawed_cells
+                    .map_or_else(|| "–".to_string(), |n| n.to_string()),
                 if p.success { "yes" } else { "**no**" },
                 p.wall_seconds
             );
@@ -80,7 +85,7 @@ pub fn scaling_markdown(record: &ScalingRecord) -> String {
         }
         md.push('\n');
     }
-    md.push_str("## Log–log slopes (against triangles; 1 = linear)\n\n| what | slope | points |\n|---|---:|---:|\n");
+    md.push_str("## Log–log slopes (against triangles unless named; 1 = linear)\n\n| what | slope | points |\n|---|---:|---:|\n");
     for s in &record.slopes {
         let _ = writeln!(md, "| {} | {} | {} |", s.what, opt(s.slope, 2), s.points);
     }
