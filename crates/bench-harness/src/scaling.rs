@@ -460,7 +460,7 @@ mod tests {
             fix_seconds: Some(s),
             peak_rss_mib: Some(n as f64 / 1000.0),
             mib_per_million_triangles: Some(1000.0),
-            // A region growing as n^1.5, labels time linear in the region.
+            // A region growing as n^1.5 while labels time grows as n: slope 2/3 against it.
             flawed_cells: Some((n as f64).powf(1.5) as usize),
         };
         let fix = [
