@@ -42,8 +42,7 @@ pub fn scaling_markdown(record: &ScalingRecord) -> String {
                 "| {} | {} | {} | {} | {:.2} |",
                 p.triangles_in,
                 p.triangles_out,
-                p.flawed_cells
-                    .map_or_else(|| "–".to_string(), |n| n.to_string()),
+                opt(p.flawed_cells.map(|n| n as f64), 0),
                 if p.success { "yes" } else { "**no**" },
                 p.wall_seconds
             );
