@@ -5,9 +5,12 @@
 //! resident-memory cap, [`crate::isolate`]), so each point's peak memory is its own:
 //!
 //! - **fix**: `k` rotated copies of Zalesak's notched sphere ([`generators::copies`]) at
-//!   the resolution that gives about the requested input triangle count, repaired by
-//!   `surftrack fix` (one shot, grid backend); per point the wall time of every stage of
-//!   its report, the triangles in and out and the child's peak resident memory;
+//!   the resolution that gives about the requested input triangle count — or, with a
+//!   base mesh (`--mesh`, e.g. a real scan), of that mesh split in four
+//!   ([`generators::subdivide`]) as many times as comes nearest the count, so its shape
+//!   stays the same at every size — repaired by `surftrack fix` (one shot, grid backend);
+//!   per point the wall time of every stage of its report, the triangles in and out and
+//!   the child's peak resident memory;
 //! - **steps**: the `spheres` scene at increasing sphere counts through each backend
 //!   (`surftrack run`), per point the mean seconds per step, the mean triangles per step
 //!   and the peak memory.
@@ -34,7 +37,8 @@ pub const SCALING_SCHEMA: &str = "surftrack.scaling/1";
 pub struct FixPoint {
     /// Triangles asked for.
     pub target_triangles: usize,
-    /// Notched-sphere resolution used.
+    /// Notched-sphere resolution used; with a base mesh, the subdivision levels applied
+    /// to it.
     pub resolution: u32,
     /// Triangles of the input (all copies).
     pub triangles_in: usize,
@@ -103,6 +107,9 @@ pub struct ScalingRecord {
     pub schema: String,
     /// Copies per `fix` input.
     pub copies: usize,
+    /// What was copied: the base mesh's file name, or `None` for the notched sphere.
+    #[serde(default)]
+    pub base_mesh: Option<String>,
     /// The `fix` points, by size.
     pub fix: Vec<FixPoint>,
     /// The step points, by backend then size.
@@ -149,6 +156,13 @@ pub fn resolution_for(target: usize, copies: usize) -> Result<u32, generators::G
     Ok(((f64::from(CALIBRATION) * scale).round() as u32).max(4))
 }
 
+/// The subdivision levels of a base mesh of `base` triangles whose `copies` copies come
+/// nearest `target` triangles (nearest on a log scale; each level multiplies by 4).
+pub fn levels_for(target: usize, copies: usize, base: usize) -> u32 {
+    let ratio = target as f64 / (base.max(1) as f64 * copies.max(1) as f64);
+    ratio.log(4.0).round().max(0.0) as u32
+}
+
 /// Everything `bench scaling` needs.
 #[derive(Clone, Debug)]
 pub struct ScalingPlan {
@@ -156,6 +170,8 @@ pub struct ScalingPlan {
     pub fix_triangles: Vec<usize>,
     /// Copies per input.
     pub copies: usize,
+    /// The mesh to copy instead of the notched sphere, and its name for the report.
+    pub base_mesh: Option<(String, mesh_core::LabeledMesh)>,
     /// Sphere counts of the step series (empty: none).
     pub spheres: Vec<usize>,
     /// Steps per sphere run.
@@ -174,8 +190,16 @@ pub struct ScalingPlan {
 fn fix_point(exe: &Path, plan: &ScalingPlan, target: usize) -> anyhow::Result<FixPoint> {
     let dir = plan.out.join(format!("fix-{target}"));
     std::fs::create_dir_all(&dir)?;
-    let resolution = resolution_for(target, plan.copies)?;
-    let base = generators::zalesak(resolution as usize)?;
+    let (resolution, base) = match &plan.base_mesh {
+        Some((_, mesh)) => {
+            let levels = levels_for(target, plan.copies, mesh.num_triangles());
+            (levels, generators::subdivide(mesh, levels)?)
+        }
+        None => {
+            let resolution = resolution_for(target, plan.copies)?;
+            (resolution, generators::zalesak(resolution as usize)?)
+        }
+    };
     let input = generators::copies(&base, plan.copies, plan.seed)?;
     let triangles_in = input.num_triangles();
     let input_path = dir.join("input.ply");
@@ -380,6 +404,10 @@ pub fn scaling(
     let mut fix = Vec::new();
     let mut sizes = plan.fix_triangles.clone();
     sizes.sort_unstable();
+    if let Some((_, mesh)) = &plan.base_mesh {
+        // Targets that round to the same subdivision level would repeat one input.
+        sizes.dedup_by_key(|&mut t| levels_for(t, plan.copies, mesh.num_triangles()));
+    }
     for target in sizes {
         let point = fix_point(exe, plan, target)?;
         progress(&format!(
@@ -407,6 +435,7 @@ pub fn scaling(
     Ok(ScalingRecord {
         schema: SCALING_SCHEMA.to_string(),
         copies: plan.copies,
+        base_mesh: plan.base_mesh.as_ref().map(|(name, _)| name.clone()),
         fix,
         steps,
         slopes,
@@ -429,6 +458,17 @@ mod tests {
             None,
             "one size only"
         );
+    }
+
+    #[test]
+    fn subdivision_levels_come_nearest_the_target() {
+        // 6 copies of 56k triangles: 337k, 1.35M, 5.4M at levels 0, 1, 2.
+        assert_eq!(levels_for(100_000, 6, 56_172), 0);
+        assert_eq!(levels_for(337_000, 6, 56_172), 0);
+        assert_eq!(levels_for(1_000_000, 6, 56_172), 1);
+        assert_eq!(levels_for(1_350_000, 6, 56_172), 1);
+        assert_eq!(levels_for(3_000_000, 6, 56_172), 2);
+        assert_eq!(levels_for(5_400_000, 6, 56_172), 2);
     }
 
     #[test]

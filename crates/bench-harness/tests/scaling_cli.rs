@@ -65,3 +65,70 @@ fn scaling_runs_fix_and_step_points_and_fits_slopes() {
     let bad = surftrack(&["bench", "scaling", "--copies", "0"], dir.path());
     assert_eq!(bad.status.code(), Some(2));
 }
+
+/// With `--mesh`, the fix series copies that mesh split in four as often as comes nearest
+/// each count: targets that round to one level run once, the next level has four times
+/// the triangles, and the report names the mesh.
+#[test]
+fn scaling_copies_a_given_mesh_at_subdivision_levels() {
+    let dir = tempfile::tempdir().unwrap();
+    let generated = surftrack(
+        &[
+            "generate",
+            "zalesak",
+            "--resolution",
+            "6",
+            "--out",
+            "base.ply",
+        ],
+        dir.path(),
+    );
+    assert!(generated.status.success(), "{}", text(&generated.stderr));
+    let base = ply_triangles(&dir.path().join("base.ply"));
+    let (one, four) = (2 * base, 8 * base);
+    let targets = format!("{one},{},{four}", one + 10);
+    let out = surftrack(
+        &[
+            "bench",
+            "scaling",
+            "--mesh",
+            "base.ply",
+            "--fix-triangles",
+            &targets,
+            "--copies",
+            "2",
+            "--spheres",
+            "0",
+            "--quiet",
+            "--out",
+            "sc",
+        ],
+        dir.path(),
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let record = json(&dir.path().join("sc/scaling.json"));
+    assert_eq!(record["base_mesh"], "base.ply");
+    let fix = record["fix"].as_array().unwrap();
+    let sizes: Vec<(u64, u64)> = fix
+        .iter()
+        .map(|p| {
+            assert_eq!(p["success"], true, "{p}");
+            (
+                p["resolution"].as_u64().unwrap(),
+                p["triangles_in"].as_u64().unwrap(),
+            )
+        })
+        .collect();
+    assert_eq!(sizes, [(0, one as u64), (1, four as u64)]);
+    let report = std::fs::read_to_string(dir.path().join("sc/report.md")).unwrap();
+    assert!(report.contains("copies of base.ply"), "{report}");
+}
+
+/// The triangle count in a PLY header.
+fn ply_triangles(path: &std::path::Path) -> usize {
+    let text = std::fs::read_to_string(path).unwrap();
+    text.lines()
+        .find_map(|l| l.strip_prefix("element face "))
+        .and_then(|n| n.trim().parse().ok())
+        .unwrap()
+}

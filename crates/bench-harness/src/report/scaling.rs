@@ -23,8 +23,12 @@ pub fn scaling_markdown(record: &ScalingRecord) -> String {
         }
         let _ = writeln!(
             md,
-            "## fix on {} rotated copies of the notched sphere\n",
-            record.copies
+            "## fix on {} rotated copies of {}\n",
+            record.copies,
+            record.base_mesh.as_deref().map_or_else(
+                || "the notched sphere".to_string(),
+                |name| format!("{name}, subdivided to size")
+            )
         );
         let _ = write!(
             md,

@@ -112,7 +112,7 @@ pub const SCENES: &[SceneInfo] = &[
         name: "copies",
         summary: "k rotated copies of a mesh (--mesh FILE or the notched sphere) teleported onto each other, one step (2024 paper Fig. 16)",
         steps: 1,
-        knobs: "--count k (4), --mesh FILE, --resolution (notched sphere cells, 16), --seed",
+        knobs: "--count k (4), --mesh FILE, --resolution = notched sphere cells (16), or with --mesh times each triangle is split in four (0), --seed",
     },
     SceneInfo {
         name: "cyclic",
@@ -366,10 +366,7 @@ pub fn build_tracked_with(
             // The copies start side by side along x, apart; the single step teleports them
             // onto their rotated, overlapping positions.
             let k = o.count.unwrap_or(4);
-            let base = match &o.mesh {
-                Some(mesh) => mesh.clone(),
-                None => generators::zalesak(resolution(16) as usize)?,
-            };
+            let base = copies_base(o)?;
             let target = generators::copies(&base, k, o.seed)?;
             let per_copy = base.to_raw().0.len().max(1);
             let (lo, hi) = target
@@ -434,14 +431,22 @@ pub fn build_scene(name: &str, o: &SceneOptions) -> Result<LabeledMesh, SceneErr
             o.radius.unwrap_or(1.0),
             [Label::OUTSIDE, Label::new(1)],
         )?),
-        "copies" => {
-            let base = match &o.mesh {
-                Some(mesh) => mesh.clone(),
-                None => generators::zalesak(o.resolution.unwrap_or(16) as usize)?,
-            };
-            Ok(generators::copies(&base, o.count.unwrap_or(4), o.seed)?)
-        }
+        "copies" => Ok(generators::copies(
+            &copies_base(o)?,
+            o.count.unwrap_or(4),
+            o.seed,
+        )?),
         _ => Ok(build_tracked(name, o)?.mesh),
+    }
+}
+
+/// The mesh `copies` copies: `--mesh` split in four `--resolution` times (none by
+/// default; the same surface, finer, so a scan can be copied at any size), or the notched
+/// sphere at that resolution.
+fn copies_base(o: &SceneOptions) -> Result<LabeledMesh, GeneratorError> {
+    match &o.mesh {
+        Some(mesh) => generators::subdivide(mesh, o.resolution.unwrap_or(0)),
+        None => generators::zalesak(o.resolution.unwrap_or(16) as usize),
     }
 }
 
@@ -541,6 +546,33 @@ mod tests {
         assert_eq!(scene.mesh.position(first), union.position(first));
         let shift = scene.mesh.position(second) - union.position(second);
         assert!(shift.x > 0.0 && shift.y == 0.0 && shift.z == 0.0);
+    }
+
+    /// With `--mesh`, `--resolution` splits the given mesh's triangles in four that many
+    /// times (none by default) instead of naming a notched-sphere size; the union covers the
+    /// same volume either way.
+    #[test]
+    fn copies_of_a_given_mesh_are_subdivided_by_the_resolution() {
+        let given = generators::zalesak(6).unwrap();
+        let with = |resolution| SceneOptions {
+            count: Some(2),
+            resolution,
+            mesh: Some(given.clone()),
+            ..SceneOptions::default()
+        };
+        let plain = build_scene("copies", &with(None)).unwrap();
+        let finer = build_scene("copies", &with(Some(1))).unwrap();
+        assert_eq!(plain.num_triangles(), 2 * given.num_triangles());
+        assert_eq!(finer.num_triangles(), 4 * plain.num_triangles());
+        let (a, b) = (
+            mesh_core::geometry::label_volumes(&plain),
+            mesh_core::geometry::label_volumes(&finer),
+        );
+        for (label, volume) in &a {
+            assert!((volume - b[label]).abs() < 1e-9, "label {label}");
+        }
+        let tracked = build_tracked("copies", &with(Some(1))).unwrap();
+        assert_eq!(tracked.mesh.num_triangles(), finer.num_triangles());
     }
 
     #[test]

@@ -7,11 +7,10 @@
 //! `20·4^s` triangles, every vertex of valence 5 or 6. Midpoints are projected at every
 //! level (not only at the end), which keeps triangle sizes within a factor of about 1.3.
 
-use std::collections::HashMap;
-
 use glam::DVec3;
 
 use super::error::{GeneratorError, check_finite, check_positive, invalid};
+use super::subdivide::split_in_four;
 use crate::ids::Label;
 use crate::mesh::LabeledMesh;
 
@@ -71,24 +70,7 @@ pub(crate) fn unit_icosphere(subdivisions: u32) -> (Vec<DVec3>, Vec<[u32; 3]>) {
         .collect();
     let mut tris = ICOSAHEDRON_FACES.to_vec();
     for _ in 0..subdivisions {
-        let mut next = Vec::with_capacity(tris.len() * 4);
-        // Every edge is shared by exactly two triangles: 3/2 edges per triangle.
-        let mut midpoints: HashMap<u64, u32> = HashMap::with_capacity(tris.len() * 3 / 2);
-        let mut midpoint = |a: u32, b: u32, positions: &mut Vec<DVec3>| -> u32 {
-            let key = (u64::from(a.min(b)) << 32) | u64::from(a.max(b));
-            *midpoints.entry(key).or_insert_with(|| {
-                let m = (positions[a as usize] + positions[b as usize]).normalize();
-                positions.push(m);
-                (positions.len() - 1) as u32
-            })
-        };
-        for &[a, b, c] in &tris {
-            let ab = midpoint(a, b, &mut positions);
-            let bc = midpoint(b, c, &mut positions);
-            let ca = midpoint(c, a, &mut positions);
-            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-        }
-        tris = next;
+        tris = split_in_four(&mut positions, &tris, |a, b| (a + b).normalize());
     }
     (positions, tris)
 }

@@ -19,6 +19,7 @@
 //! | [`mesh_implicit`] | the zero set of any function, by marching tetrahedra | as given |
 //! | [`voronoi_foam`] | the Voronoi cells of random seeds clipped to a cube | `1..=n` |
 //! | [`copies`] | `k` rotated, overlapping copies of a mesh ([`copies_with_rotations`]) | offset per copy |
+//! | [`subdivide`] | any mesh with every triangle split in four, `levels` times (same surface) | as given |
 
 mod bubble;
 mod copies;
@@ -26,6 +27,7 @@ mod error;
 mod icosphere;
 mod implicit;
 mod spheres;
+mod subdivide;
 mod voronoi;
 mod zalesak;
 
@@ -41,5 +43,6 @@ pub use spheres::{
     ATTEMPTS_PER_SPHERE, MIN_GAP_FRACTION, PlacedSphere, place_random_spheres, random_spheres,
     spheres_mesh,
 };
+pub use subdivide::subdivide;
 pub use voronoi::{MAX_CELLS, MAX_SITE_ATTEMPTS, voronoi_foam};
 pub use zalesak::{NotchedSphere, zalesak};
