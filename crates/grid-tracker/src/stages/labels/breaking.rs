@@ -24,8 +24,8 @@
 use glam::DVec3;
 use mesh_core::{Label, LabeledMesh};
 
-use crate::stages::grid::Grid;
 use crate::stages::grid::primitives::GridEdge;
+use crate::stages::grid::{Grid, NodeId};
 use crate::stages::materials::{MaterialVector, Materials};
 
 /// A point on a grid edge where the material vector turns from physical to non-physical,
@@ -104,10 +104,19 @@ impl Walk {
     }
 }
 
+/// Whether walking `edge`, whose end nodes have allocated ids `ends`, can find anything:
+/// only an edge with crossings or a flawed end changes state along its length (the vector
+/// is the same all along otherwise: an end's own vector equals its vector along every
+/// axis), so every other edge is skipped without walking.
+#[inline]
+pub(crate) fn needs_walk(materials: &Materials, edge: GridEdge, ends: [Option<NodeId>; 2]) -> bool {
+    let crossings = ends[0].map_or(0, |n| materials.edge_crossing_count(n, edge.axis));
+    crossings > 0 || ends.iter().flatten().any(|&n| materials.is_flawed(n))
+}
+
 /// Walks `edge` (whose end nodes have physical labels `status`) and appends its breaking
-/// points and transitions to `out`. Edges without crossings whose ends are not flawed are
-/// skipped without walking: the vector is the same all along (an end's own vector equals
-/// its vector along every axis), so nothing changes.
+/// points and transitions to `out`. The caller walks only edges for which [`needs_walk`]
+/// holds.
 pub(crate) fn scan_edge(
     mesh: &LabeledMesh,
     grid: &Grid,
@@ -120,11 +129,6 @@ pub(crate) fn scan_edge(
     let a = edge.node;
     let axis = edge.axis.index();
     let id = grid.node_id(a);
-    let crossings = id.map_or(0, |n| materials.edge_crossing_count(n, edge.axis));
-    let flawed = |p| grid.node_id(p).is_some_and(|n| materials.is_flawed(n));
-    if crossings == 0 && !flawed(a) && !flawed(edge.end()) {
-        return;
-    }
     out.scanned += 1;
     let lattice = grid.lattice();
     let base = lattice.node_position(a);

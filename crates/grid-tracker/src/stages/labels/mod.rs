@@ -47,9 +47,9 @@ use mesh_core::{Label, LabeledMesh};
 use rayon::prelude::*;
 
 use crate::stages::flaws::FlawedRegion;
-use crate::stages::grid::Grid;
 use crate::stages::grid::primitives::{GridEdge, unit};
 use crate::stages::grid::tiles::TileHasher;
+use crate::stages::grid::{Grid, NodeId};
 use crate::stages::materials::{MaterialVector, Materials};
 
 pub use breaking::{BreakingPoint, EdgeTransitions};
@@ -192,13 +192,20 @@ impl NodeLabels {
     }
 }
 
-/// The physical label of any lattice node: allocated nodes by their vector and axis
-/// agreement, unallocated ones by the vector they inherit along x (never flawed).
-fn physical_status(grid: &Grid, materials: &Materials, p: IVec3) -> Option<Label> {
-    match grid.node_id(p) {
+/// The allocated id and physical label of any lattice node: allocated nodes by their
+/// vector and axis agreement, unallocated ones by the vector they inherit along x (never
+/// flawed).
+fn physical_status(
+    grid: &Grid,
+    materials: &Materials,
+    p: IVec3,
+) -> (Option<NodeId>, Option<Label>) {
+    let id = grid.node_id(p);
+    let label = match id {
         Some(n) => materials.physical_label(n),
         None => materials.material_at(grid, p).label(),
-    }
+    };
+    (id, label)
 }
 
 /// Assigns a label to every corner of every flawed cell (§8.1).
@@ -242,10 +249,12 @@ pub fn correct_labels_with(
     // Region nodes, in lattice order.
     let (nodes, index) =
         nodes::region_nodes(region).map_err(|e| LabelError::TooManyNodes { nodes: e.0 })?;
-    let status: Vec<Option<Label>> = nodes
+    // Each node's allocated id (looked up once: the edge scan asks about both ends of
+    // three edges per node) and physical label.
+    let (ids, status): (Vec<Option<NodeId>>, Vec<Option<Label>>) = nodes
         .par_iter()
         .map(|&p| physical_status(grid, materials, p))
-        .collect();
+        .unzip();
     let idx = |p: IVec3| index.get(p).map(|i| i as usize);
     phase[0] = clock.elapsed().as_secs_f64();
 
@@ -263,7 +272,11 @@ pub fn correct_labels_with(
                     let Some(j) = idx(n + unit(axis)) else {
                         continue;
                     };
-                    if !edge.cells().iter().any(|&c| region.is_flawed(c)) {
+                    // The cheap test first: deep inside an overlap no edge is walked.
+                    let ends = [ids[i], ids[j]];
+                    if !breaking::needs_walk(materials, edge, ends)
+                        || !edge.cells().iter().any(|&c| region.is_flawed(c))
+                    {
                         continue;
                     }
                     breaking::scan_edge(
