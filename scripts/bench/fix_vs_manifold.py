@@ -26,7 +26,8 @@ Steps, all in one session on the same machine:
    `--determinism`, the output of a one-thread run is byte-identical.
 
 Writes `results.json` and `table.md` in `--out` (default `target/fix-vs-manifold`) and
-prints the table. Exit code 0 when every check passed, 1 otherwise.
+prints the table; the mesh it copied is left there too, as `base` plus its extension
+(`base.obj` for the bunny), for other commands (`surftrack bench scaling --mesh`). Exit code 0 when every check passed, 1 otherwise.
 Not part of CI (it needs PyPI and takes about a minute).
 """
 
@@ -35,6 +36,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shutil
 import struct
 import subprocess
 import sys
@@ -255,6 +257,8 @@ def main() -> int:
         )
         surftrack = ROOT / "target" / "release" / "surftrack"
     mesh = args.mesh or bunny_path()
+    # A copy of the base mesh beside the results, for `bench scaling --mesh` and the like.
+    shutil.copyfile(mesh, args.out / ("base" + mesh.suffix))
     copies_ply = args.out / "copies.ply"
     union_ply = args.out / "union.ply"
     subprocess.check_call(
