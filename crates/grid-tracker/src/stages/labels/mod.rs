@@ -294,6 +294,7 @@ pub fn correct_labels_with(
         )
         .map(|(_, out)| out)
         .collect();
+    drop(ids); // freed before the march allocates its per-node arrays, not added to them
 
     let mut stats = LabelStats {
         nodes: nodes.len(),
