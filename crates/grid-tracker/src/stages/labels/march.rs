@@ -124,6 +124,98 @@ impl Slot {
     };
 }
 
+/// A Dijkstra-ordered closest-point propagation in progress: the heap of open nodes and
+/// the number of updates made. Shared by the plain march and the levels of the far-field
+/// march, which differ only in which nodes they start from and where they stop.
+struct Marching {
+    heap: BinaryHeap<Item>,
+    updates: usize,
+}
+
+impl Marching {
+    fn new() -> Self {
+        Marching {
+            heap: BinaryHeap::new(),
+            updates: 0,
+        }
+    }
+
+    /// Offers `point` (at `position`) to node `j` (at `at`): taken when `j` is open and
+    /// the point is strictly nearer than what it has.
+    #[inline(always)]
+    fn offer(&mut self, slots: &mut [Slot], j: u32, at: DVec3, point: u32, position: DVec3) {
+        let slot = &mut slots[j as usize];
+        if slot.point == Slot::CLOSED {
+            return;
+        }
+        let distance = at.distance(position);
+        if slot.point == Slot::NONE || distance < slot.distance {
+            *slot = Slot { distance, point };
+            self.heap.push(Item { distance, node: j });
+            self.updates += 1;
+        }
+    }
+
+    /// Offers every seed `(node, index into points)` to its node.
+    fn seed(
+        &mut self,
+        nodes: &impl Nodes,
+        points: &[BreakingPoint],
+        seeds: impl Iterator<Item = (u32, u32)>,
+        slots: &mut [Slot],
+    ) {
+        for (i, point) in seeds {
+            if (i as usize) < slots.len() {
+                let at = nodes.position(i);
+                self.offer(slots, i, at, point, points[point as usize].position);
+            }
+        }
+    }
+
+    /// Queues node `i` with the point it already holds (resuming from an earlier level).
+    fn resume(&mut self, slots: &[Slot], i: u32) {
+        let slot = slots[i as usize];
+        if slot.point < Slot::CLOSED {
+            self.heap.push(Item {
+                distance: slot.distance,
+                node: i,
+            });
+        }
+    }
+
+    /// Finalises nodes in order of (distance, node) until the heap is empty, the next
+    /// distance exceeds `limit`, or the work bound is spent; `finalised(i)` is told every
+    /// node finalised.
+    fn run(
+        &mut self,
+        nodes: &impl Nodes,
+        points: &[BreakingPoint],
+        slots: &mut [Slot],
+        limit: f64,
+        mut finalised: impl FnMut(u32),
+    ) {
+        let budget = self.heap.len() + UPDATES_PER_NODE * nodes.len();
+        for _ in 0..budget {
+            let Some(&Item { distance, node }) = self.heap.peek() else {
+                break;
+            };
+            if distance > limit {
+                break;
+            }
+            self.heap.pop();
+            let cur = slots[node as usize];
+            if cur.point >= Slot::CLOSED || cur.distance < distance {
+                continue; // stale entry
+            }
+            finalised(node);
+            let position = points[cur.point as usize].position;
+            nodes.for_each_neighbour(node, |j, at| {
+                self.offer(slots, j, at, cur.point, position);
+            });
+        }
+    }
+}
+
 /// Marches from `seeds` (`(node, index into points)`) over the nodes whose slot is open
 /// ([`Slot::OPEN`] or already reached), improving `slots`. Returns the number of updates.
 ///
@@ -136,58 +228,202 @@ pub fn march_over(
     seeds: impl Iterator<Item = (u32, u32)>,
     slots: &mut [Slot],
 ) -> usize {
-    let mut heap = BinaryHeap::new();
-    let mut updates = 0usize;
-    #[inline(always)]
-    fn offer(
-        heap: &mut BinaryHeap<Item>,
-        slots: &mut [Slot],
-        updates: &mut usize,
-        j: u32,
-        at: DVec3,
-        point: u32,
-        position: DVec3,
-    ) {
-        let slot = &mut slots[j as usize];
-        if slot.point == Slot::CLOSED {
-            return;
-        }
-        let distance = at.distance(position);
-        if slot.point == Slot::NONE || distance < slot.distance {
-            *slot = Slot { distance, point };
-            heap.push(Item { distance, node: j });
-            *updates += 1;
+    let mut marching = Marching::new();
+    marching.seed(nodes, points, seeds, slots);
+    marching.run(nodes, points, slots, f64::INFINITY, |_| {});
+    marching.updates
+}
+
+/// The region's nodes at the two resolutions of [`march_far_field`].
+pub trait Levels {
+    /// The nodes with the full stencil (every neighbour one lattice step away).
+    fn fine(&self) -> &impl Nodes;
+    /// The coarse nodes (lattice coordinates multiples of the block) with the stencil
+    /// scaled by the block; [`Nodes::for_each_neighbour`] is only asked about them.
+    fn coarse(&self) -> &impl Nodes;
+    /// Whether node `i` is a coarse node.
+    fn is_coarse(&self, i: u32) -> bool;
+    /// The coarse nodes at the corners of the coarse cell holding node `i` (a coarse node
+    /// is the lowest corner of its own cell); [`NO_NODE`] where a corner is no region
+    /// node.
+    fn coarse_corners(&self, i: u32) -> [u32; 8];
+}
+
+/// Marks a missing coarse corner in [`Levels::coarse_corners`].
+pub const NO_NODE: u32 = u32::MAX;
+
+/// What [`march_far_field`] did, for the stage's statistics.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FarFieldStats {
+    /// Updates of all levels (work measure).
+    pub updates: usize,
+    /// Nodes finalised by the fine march near the seeds.
+    pub band_nodes: usize,
+    /// Nodes beyond it, filled from the coarse march.
+    pub far_nodes: usize,
+    /// Far nodes marched again at full resolution.
+    pub refined_nodes: usize,
+}
+
+/// [`march_over`] for regions deep in volume, such as the overlap of solids: the same
+/// propagation near the seeds, a coarser one far from them. Why: where rotated copies of
+/// a solid overlap, the non-physical region is a volume, and a full-resolution march
+/// over it is memory-bound work per node of that volume (measured on 6 bunnies at 5.4M
+/// triangles: 19M region cells, labels 39 s of a 121 s `fix`), while labels change only
+/// across surfaces.
+///
+/// 1. **Band**: the fine march from `seeds`, finalising every node within `band` of its
+///    nearest point — exactly what [`march_over`] gives there, since both finalise in
+///    the same order.
+/// 2. **Coarse**: the march resumes from every coarse node holding a point, over the
+///    coarse nodes only (block³ times fewer nodes).
+/// 3. **Fill**: every node beyond the band takes the nearest of the points its coarse
+///    cell's eight corners hold (and its own, if it has one), independently, in parallel.
+/// 4. **Refine**: where those corners carry more than one label (a label interface runs
+///    through the coarse cell) or none reached the node, grown by one node so that every
+///    edge across which labels may change has both ends refined, the fine march resumes
+///    over those nodes only, from their points and those of their other neighbours.
+///
+/// Beyond the band a node's point may be up to about ℓ/2 farther than the plain march's
+/// where its coarse cell is not refined; it has the same label there (all corners agree),
+/// and §8.3 reads points only across label changes, which are refined.
+///
+/// Deterministic: levels 1, 2 and 4 are sequential in the order of [`march_over`], level
+/// 3 is a pure function per node.
+pub fn march_far_field(
+    levels: &(impl Levels + Sync),
+    points: &[BreakingPoint],
+    seeds: impl Iterator<Item = (u32, u32)>,
+    slots: &mut [Slot],
+    band: f64,
+) -> FarFieldStats {
+    use rayon::prelude::*;
+    let fine = levels.fine();
+    let n = fine.len();
+    let mut stats = FarFieldStats::default();
+
+    // 1. Band.
+    let mut near = vec![false; n];
+    let mut marching = Marching::new();
+    marching.seed(fine, points, seeds, slots);
+    marching.run(fine, points, slots, band, |i| near[i as usize] = true);
+    stats.updates += marching.updates;
+    stats.band_nodes = near.iter().filter(|&&b| b).count();
+    if marching.heap.is_empty() {
+        return stats; // nothing beyond the band
+    }
+    drop(marching);
+
+    // 2. Coarse.
+    let mut marching = Marching::new();
+    for i in 0..n as u32 {
+        if levels.is_coarse(i) {
+            marching.resume(slots, i);
         }
     }
-    for (i, point) in seeds {
-        if (i as usize) < slots.len() {
-            let at = nodes.position(i);
-            offer(
-                &mut heap,
-                slots,
-                &mut updates,
-                i,
-                at,
-                point,
-                points[point as usize].position,
-            );
+    marching.run(levels.coarse(), points, slots, f64::INFINITY, |_| {});
+    stats.updates += marching.updates;
+    drop(marching);
+
+    // 3. Fill: (node, nearest candidate, whether to refine it).
+    let snapshot: &[Slot] = slots;
+    let near = &near;
+    let filled: Vec<(u32, Slot, bool)> = (0..n as u32)
+        .into_par_iter()
+        .filter(|&i| !near[i as usize] && snapshot[i as usize].point != Slot::CLOSED)
+        .map(|i| {
+            let at = levels.fine().position(i);
+            let own = snapshot[i as usize];
+            let mut best = (own.point < Slot::CLOSED).then_some(own);
+            let mut label = None;
+            let mut mixed = false;
+            for c in levels.coarse_corners(i) {
+                let Some(s) = snapshot.get(c as usize).filter(|s| s.point < Slot::CLOSED) else {
+                    continue;
+                };
+                let p = &points[s.point as usize];
+                mixed |= label.is_some_and(|l| l != p.label);
+                label = Some(p.label);
+                let distance = at.distance(p.position);
+                let better = best.is_none_or(|b: Slot| {
+                    distance < b.distance || (distance == b.distance && s.point < b.point)
+                });
+                if better {
+                    best = Some(Slot {
+                        distance,
+                        point: s.point,
+                    });
+                }
+            }
+            (i, best.unwrap_or(Slot::OPEN), mixed || label.is_none())
+        })
+        .collect();
+    stats.far_nodes = filled.len();
+    let mut refine = vec![false; n];
+    let mut flagged: Vec<u32> = Vec::new();
+    for &(i, slot, again) in &filled {
+        slots[i as usize] = slot;
+        if again {
+            refine[i as usize] = true;
+            flagged.push(i);
         }
     }
-    let budget = heap.len() + UPDATES_PER_NODE * nodes.len();
-    for _ in 0..budget {
-        let Some(Item { distance, node }) = heap.pop() else {
-            break;
-        };
-        let cur = slots[node as usize];
-        if cur.point >= Slot::CLOSED || cur.distance < distance {
-            continue; // stale entry
-        }
-        let position = points[cur.point as usize].position;
-        nodes.for_each_neighbour(node, |j, at| {
-            offer(&mut heap, slots, &mut updates, j, at, cur.point, position);
+    drop(filled);
+    for k in 0..flagged.len() {
+        fine.for_each_neighbour(flagged[k], |j, _| {
+            let ju = j as usize;
+            if !refine[ju] && !near[ju] && slots[ju].point != Slot::CLOSED {
+                refine[ju] = true;
+                flagged.push(j);
+            }
         });
     }
-    updates
+    flagged.sort_unstable();
+    stats.refined_nodes = flagged.len();
+
+    // 4. Refine, over the flagged nodes only.
+    let only = Only {
+        nodes: fine,
+        open: &refine,
+    };
+    let mut marching = Marching::new();
+    for &i in &flagged {
+        marching.resume(slots, i);
+        let at = fine.position(i);
+        fine.for_each_neighbour(i, |j, _| {
+            let s = slots[j as usize];
+            if !refine[j as usize] && s.point < Slot::CLOSED {
+                let position = points[s.point as usize].position;
+                marching.offer(slots, i, at, s.point, position);
+            }
+        });
+    }
+    marching.run(&only, points, slots, f64::INFINITY, |_| {});
+    stats.updates += marching.updates;
+    stats
+}
+
+/// The neighbours of `nodes` restricted to those with `open[j]`.
+struct Only<'a, N> {
+    nodes: &'a N,
+    open: &'a [bool],
+}
+
+impl<N: Nodes> Nodes for Only<'_, N> {
+    fn len(&self) -> usize {
+        self.nodes.len()
+    }
+    #[inline]
+    fn for_each_neighbour(&self, i: u32, mut offer: impl FnMut(u32, DVec3)) {
+        self.nodes.for_each_neighbour(i, |j, at| {
+            if self.open[j as usize] {
+                offer(j, at);
+            }
+        });
+    }
+    fn position(&self, i: u32) -> DVec3 {
+        self.nodes.position(i)
+    }
 }
 
 /// Marches from `seeds` (`(node, breaking point)`) over the nodes with `open[node]`,

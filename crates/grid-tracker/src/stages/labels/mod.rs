@@ -14,7 +14,10 @@
 //!   nearest breaking point, found by a Dijkstra-ordered propagation of closest points
 //!   over the region's grid nodes (Sethian 1999; the propagated quantity is the nearest
 //!   breaking point itself, so distances are true Euclidean distances to it). Physical
-//!   nodes relay points without taking their labels.
+//!   nodes relay points without taking their labels. Farther than 8 cells from every
+//!   breaking point (the inside of overlapping solids) the march runs on a 4× coarser
+//!   lattice and refines only where labels change ([`march::march_far_field`]; not in the
+//!   paper, which marches every node).
 //!
 //! Fallback (not in the paper, which assumes every non-physical component touches a
 //! breaking point): a non-physical node that no breaking point reaches (none lies in its
@@ -105,6 +108,11 @@ pub struct LabelStats {
     pub unreached_nodes: usize,
     /// Label updates of the marching (work measure).
     pub updates: usize,
+    /// Nodes farther than the far-field band from every breaking point, labelled from the
+    /// coarse march ([`march::march_far_field`]).
+    pub far_nodes: usize,
+    /// Of those, the nodes marched again at full resolution (a label interface nearby).
+    pub refined_nodes: usize,
 }
 
 /// What one region node knows.
@@ -349,8 +357,12 @@ pub fn correct_labels_with(
     });
     let mut slots = vec![march::Slot::OPEN; nodes.len()];
     if open.iter().any(|&o| o) {
-        let region = RegionNodes::new(&nodes, &index, &lattice);
-        stats.updates += march::march_over(&region, &bps, seeds, &mut slots);
+        let levels = RegionLevels::new(&nodes, &index, &lattice);
+        let band = FAR_FIELD_BAND_CELLS * lattice.cell_size;
+        let far = march::march_far_field(&levels, &bps, seeds, &mut slots, band);
+        stats.updates += far.updates;
+        stats.far_nodes = far.far_nodes;
+        stats.refined_nodes = far.refined_nodes;
     }
     let mut best: Vec<Option<march::Nearest>> = slots
         .iter()
@@ -471,13 +483,16 @@ pub fn correct_labels_with(
 
 /// The region's nodes as the marching sees them: stencil neighbours looked up in the
 /// node index, positions computed from lattice coordinates (no per-node position array).
-/// For a dense index and a node away from the box's faces, the 26 neighbours are fixed
-/// offsets into the box array, without bounds checks.
+/// The stencil is [`march::OFFSETS`] scaled by `step` lattice cells (1: the fine march;
+/// [`FAR_FIELD_BLOCK`]: its coarse level). For a dense index and a node at least `step`
+/// away from the box's faces, the 26 neighbours are fixed offsets into the box array,
+/// without bounds checks.
 struct RegionNodes<'a> {
     nodes: &'a [IVec3],
     index: &'a NodeIndex,
     lattice: &'a crate::stages::grid::Lattice,
-    /// Box-array offsets of [`march::OFFSETS`] (dense index only).
+    step: i32,
+    /// Box-array offsets of the scaled stencil (dense index only).
     deltas: [isize; march::STENCIL],
 }
 
@@ -486,11 +501,13 @@ impl<'a> RegionNodes<'a> {
         nodes: &'a [IVec3],
         index: &'a NodeIndex,
         lattice: &'a crate::stages::grid::Lattice,
+        step: i32,
     ) -> Self {
         let mut deltas = [0isize; march::STENCIL];
         if let NodeIndex::Dense { dims, .. } = index {
             let (dx, dy) = (dims.x as isize, dims.y as isize);
             for (k, d) in march::OFFSETS.iter().enumerate() {
+                let d = *d * step;
                 deltas[k] = d.x as isize + dx * (d.y as isize + dy * d.z as isize);
             }
         }
@@ -498,6 +515,7 @@ impl<'a> RegionNodes<'a> {
             nodes,
             index,
             lattice,
+            step,
             deltas,
         }
     }
@@ -511,23 +529,24 @@ impl march::Nodes for RegionNodes<'_> {
     #[inline]
     fn for_each_neighbour(&self, i: u32, mut offer: impl FnMut(u32, DVec3)) {
         let p = self.nodes[i as usize];
+        let step = self.step;
         if let NodeIndex::Dense { lo, dims, index } = self.index {
             let d = p - *lo;
-            if d.cmpgt(IVec3::ZERO).all() && d.cmplt(*dims - IVec3::ONE).all() {
+            if d.cmpge(IVec3::splat(step)).all() && d.cmplt(*dims - IVec3::splat(step)).all() {
                 let base = d.x as isize
                     + dims.x as isize * (d.y as isize + dims.y as isize * d.z as isize);
                 for (k, &delta) in self.deltas.iter().enumerate() {
                     let j = index[(base + delta) as usize];
                     if j != nodes::NONE {
-                        offer(j, self.lattice.node_position(p + march::OFFSETS[k]));
+                        offer(j, self.lattice.node_position(p + march::OFFSETS[k] * step));
                     }
                 }
                 return;
             }
         }
         for d in march::OFFSETS {
-            if let Some(j) = self.index.get(p + d) {
-                offer(j, self.lattice.node_position(p + d));
+            if let Some(j) = self.index.get(p + d * step) {
+                offer(j, self.lattice.node_position(p + d * step));
             }
         }
     }
@@ -535,6 +554,69 @@ impl march::Nodes for RegionNodes<'_> {
     #[inline]
     fn position(&self, i: u32) -> DVec3 {
         self.lattice.node_position(self.nodes[i as usize])
+    }
+}
+
+/// Lattice cells between the coarse nodes of the far-field march
+/// ([`march::march_far_field`]): 4³ = 64 times fewer nodes marched far from the breaking
+/// points.
+const FAR_FIELD_BLOCK: i32 = 4;
+
+/// Distance from the nearest breaking point, in cells, within which the march runs at full
+/// resolution: two coarse cells. Measured on 6 bunnies at 1.35M triangles, a narrower
+/// band (2 cells) leaves more nodes to refine, and beyond the band the fill's points are
+/// within ~0.4ℓ of the nearest (1ℓ with 2 cells).
+const FAR_FIELD_BAND_CELLS: f64 = 2.0 * FAR_FIELD_BLOCK as f64;
+
+/// The region's nodes at the far-field march's two resolutions.
+struct RegionLevels<'a> {
+    fine: RegionNodes<'a>,
+    coarse: RegionNodes<'a>,
+}
+
+impl<'a> RegionLevels<'a> {
+    fn new(
+        nodes: &'a [IVec3],
+        index: &'a NodeIndex,
+        lattice: &'a crate::stages::grid::Lattice,
+    ) -> Self {
+        RegionLevels {
+            fine: RegionNodes::new(nodes, index, lattice, 1),
+            coarse: RegionNodes::new(nodes, index, lattice, FAR_FIELD_BLOCK),
+        }
+    }
+}
+
+impl march::Levels for RegionLevels<'_> {
+    fn fine(&self) -> &impl march::Nodes {
+        &self.fine
+    }
+
+    fn coarse(&self) -> &impl march::Nodes {
+        &self.coarse
+    }
+
+    #[inline]
+    fn is_coarse(&self, i: u32) -> bool {
+        let p = self.fine.nodes[i as usize];
+        let b = self.coarse.step;
+        p.x.rem_euclid(b) == 0 && p.y.rem_euclid(b) == 0 && p.z.rem_euclid(b) == 0
+    }
+
+    #[inline]
+    fn coarse_corners(&self, i: u32) -> [u32; 8] {
+        let p = self.fine.nodes[i as usize];
+        let b = self.coarse.step;
+        let base = IVec3::new(
+            p.x.div_euclid(b) * b,
+            p.y.div_euclid(b) * b,
+            p.z.div_euclid(b) * b,
+        );
+        std::array::from_fn(|k| {
+            let k = k as i32;
+            let corner = base + IVec3::new(k & 1, (k >> 1) & 1, (k >> 2) & 1) * b;
+            self.fine.index.get(corner).unwrap_or(march::NO_NODE)
+        })
     }
 }
 

@@ -257,7 +257,7 @@ fn region_nodes_list_the_stencil_neighbours_in_order() {
         let (nodes, index) = region_nodes(&r.region).unwrap();
         assert_eq!(matches!(index, NodeIndex::Dense { .. }), dense);
         let lattice = *r.grid.lattice();
-        let view = RegionNodes::new(&nodes, &index, &lattice);
+        let view = RegionNodes::new(&nodes, &index, &lattice, 1);
         assert_eq!(view.len(), nodes.len());
         let mut interior = 0;
         for (i, &p) in nodes.iter().enumerate() {
@@ -273,4 +273,97 @@ fn region_nodes_list_the_stencil_neighbours_in_order() {
         }
         assert!(interior > 0, "some nodes have all 26 neighbours");
     }
+}
+
+/// The far-field march against the plain one on a solid block of 41³ nodes whose six
+/// faces are breaking points of six labels (the inside of an overlap, seen from its
+/// surfaces): nodes within the band get exactly the plain march's points; beyond it every
+/// node is reached, its point is within ℓ/2 of the true nearest breaking point, and it
+/// takes another label than the plain march only where both labels are equally near (on
+/// the diagonal planes between two faces).
+#[test]
+fn the_far_field_march_matches_the_plain_one() {
+    let n = 41;
+    let lattice = crate::stages::grid::Lattice {
+        origin: DVec3::new(0.3, -0.2, 0.1),
+        cell_size: 0.5,
+    };
+    let ell = lattice.cell_size;
+    let mut nodes = Vec::new();
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                nodes.push(IVec3::new(x, y, z));
+            }
+        }
+    }
+    let index = NodeIndex::Dense {
+        lo: IVec3::ZERO,
+        dims: IVec3::splat(n),
+        index: (0..nodes.len() as u32).collect(),
+    };
+    // Face k's nodes carry breaking points of label k + 1, half a cell outside the face.
+    let mut points = Vec::new();
+    let mut seeds = Vec::new();
+    for (i, &p) in nodes.iter().enumerate() {
+        for axis in 0..3 {
+            for (side, at) in [(0, 0), (1, n - 1)] {
+                if p[axis] == at {
+                    let mut position = lattice.node_position(p);
+                    position[axis] += if side == 0 { -0.5 } else { 0.5 } * ell;
+                    let label = Label::new(1 + 2 * axis as u32 + side);
+                    points.push(BreakingPoint { position, label });
+                    seeds.push((i as u32, points.len() as u32 - 1));
+                }
+            }
+        }
+    }
+    let fine = RegionNodes::new(&nodes, &index, &lattice, 1);
+    let mut plain = vec![march::Slot::OPEN; nodes.len()];
+    march::march_over(&fine, &points, seeds.iter().copied(), &mut plain);
+    let levels = RegionLevels::new(&nodes, &index, &lattice);
+    let band = FAR_FIELD_BAND_CELLS * ell;
+    let mut far = vec![march::Slot::OPEN; nodes.len()];
+    let stats = march::march_far_field(&levels, &points, seeds.iter().copied(), &mut far, band);
+    assert!(stats.far_nodes > 10_000, "{stats:?}");
+    assert!(stats.refined_nodes < stats.far_nodes, "{stats:?}");
+    let nearest_of = |at: DVec3, label: Option<Label>| {
+        points
+            .iter()
+            .filter(|b| label.is_none_or(|l| b.label == l))
+            .map(|b| b.position.distance(at))
+            .fold(f64::INFINITY, f64::min)
+    };
+    let mut relabelled = 0;
+    for (i, (p, f)) in plain.iter().zip(&far).enumerate() {
+        assert!(f.point < march::Slot::CLOSED, "node {i} unreached");
+        if p.distance <= band {
+            assert_eq!(
+                (p.point, p.distance),
+                (f.point, f.distance),
+                "band node {i}"
+            );
+            continue;
+        }
+        let at = lattice.node_position(nodes[i]);
+        let nearest = nearest_of(at, None);
+        assert!(
+            f.distance <= nearest + 0.5 * ell,
+            "node {i}: {} vs {nearest}",
+            f.distance
+        );
+        let (lp, lf) = (
+            points[p.point as usize].label,
+            points[f.point as usize].label,
+        );
+        if lp != lf {
+            relabelled += 1;
+            let gap = (nearest_of(at, Some(lp)) - nearest_of(at, Some(lf))).abs();
+            assert!(gap <= 1e-9 * ell, "node {i}: labels {lp} / {lf}, gap {gap}");
+        }
+    }
+    assert!(
+        relabelled < nodes.len() / 50,
+        "{relabelled} nodes relabelled"
+    );
 }
