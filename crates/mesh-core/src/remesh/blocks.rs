@@ -367,10 +367,25 @@ fn block_pass<R: Send>(
         side,
     };
     let blocks = cut_into_blocks(mesh, work, &lattice, margin);
-    let worked: Vec<(Worked, R)> = blocks
+    // Largest blocks first: one block can hold several times the mean work (six bunnies:
+    // 13k vertices against a mean of 3.3k), and started last it leaves the other cores
+    // idle while it runs. The order of running does not touch the result: each block
+    // reads only the mesh as the pass found it, and write-back stays in key order.
+    let mut order: Vec<usize> = (0..blocks.len()).collect();
+    order.sort_by_key(|&i| std::cmp::Reverse(blocks[i].work.len() + blocks[i].tris.len()));
+    let mut ran: Vec<(usize, (Worked, R))> = order
         .par_iter()
-        .map(|b| run_block(mesh, attrs, editable.as_deref(), b, make_guard, stage))
+        .with_max_len(1)
+        .map(|&i| {
+            let b = &blocks[i];
+            (
+                i,
+                run_block(mesh, attrs, editable.as_deref(), b, make_guard, stage),
+            )
+        })
         .collect();
+    ran.sort_unstable_by_key(|&(i, _)| i);
+    let worked = ran.into_iter().map(|(_, w)| w);
     let mut next = Vec::new();
     let mut edits = 0;
     for (block, report) in worked {
