@@ -44,7 +44,8 @@ use super::attributes::VertexAttributes;
 use super::fence::FenceGuard;
 use super::guard::EditGuard;
 use super::improve::{
-    ImproveParams, ImproveRegion, ImproveReport, improve_in, initial_work, mean_edge_length,
+    ImproveParams, ImproveRegion, ImproveReport, improve_in, improve_part, initial_work,
+    mean_edge_length,
 };
 use super::separate::AreaDecrease;
 
@@ -136,13 +137,14 @@ pub fn improve_in_blocks(
     let mut left: Option<Vec<VertexId>> = None;
     if blocks.runs(side) {
         let stage = |job: BlockJob<'_>| {
-            let r = improve_in(
+            let r = improve_part(
                 job.mesh,
                 &params,
                 ImproveRegion::Vertices(job.work),
                 job.attrs,
                 job.guard,
                 &AreaDecrease,
+                false,
             );
             let edits = r.edits();
             (r, edits)

@@ -397,6 +397,23 @@ pub fn improve_in(
     guard: &mut dyn EditGuard,
     strength: &dyn SeparationStrength,
 ) -> ImproveReport {
+    improve_part(mesh, params, region, attrs, guard, strength, true)
+}
+
+/// [`improve_in`] with the end-of-run edge figures ([`ImproveReport::edges`],
+/// [`ImproveReport::edges_in_range`]) left at zero unless `edge_figures`: they measure
+/// every edge of `mesh`, which for a block of [`super::blocks`] is a copy the caller
+/// throws away and measures again as a whole, so there they cost a full edge scan per
+/// block for nothing.
+pub(super) fn improve_part(
+    mesh: &mut LabeledMesh,
+    params: &ImproveParams,
+    region: ImproveRegion<'_>,
+    attrs: &mut VertexAttributes,
+    guard: &mut dyn EditGuard,
+    strength: &dyn SeparationStrength,
+    edge_figures: bool,
+) -> ImproveReport {
     let mut run = Run::new(mesh, params);
     // Every edit goes through the recorder, which notes where the mesh changed: the work
     // list of the rest of the sweep, of the next smoothing pass and of the next sweep.
@@ -510,6 +527,9 @@ pub fn improve_in(
         report = ?run.report,
         "improve: seconds per operation"
     );
+    if !edge_figures {
+        return run.report;
+    }
     let (lo, hi) = run.range();
     let edges = run.edges(mesh);
     let (count, inside) = (
@@ -814,7 +834,13 @@ struct Run<'p> {
 
 impl<'p> Run<'p> {
     fn new(mesh: &LabeledMesh, params: &'p ImproveParams) -> Self {
-        let edges = edge_list(mesh);
+        // The whole edge list only when the target needs the mean length; a run over a
+        // work list never reads it otherwise, and building it cost as much as a sweep's
+        // candidate search on a block or a tracking step.
+        let (edges, edges_valid) = match params.target_edge_length {
+            Some(_) => (Vec::new(), false),
+            None => (edge_list(mesh), true),
+        };
         let target = params
             .target_edge_length
             .unwrap_or_else(|| mean_length(&edges));
@@ -829,7 +855,7 @@ impl<'p> Run<'p> {
                 ..Default::default()
             },
             edges,
-            edges_valid: true,
+            edges_valid,
             split: SplitScratch::default(),
             collapse: CollapseScratch::default(),
             edit: Edit::default(),
