@@ -834,9 +834,9 @@ struct Run<'p> {
 
 impl<'p> Run<'p> {
     fn new(mesh: &LabeledMesh, params: &'p ImproveParams) -> Self {
-        // The whole edge list only when the target needs the mean length; a run over a
-        // work list never reads it otherwise, and building it cost as much as a sweep's
-        // candidate search on a block or a tracking step.
+        // The whole edge list only when the target needs the mean length: a run over a
+        // work list never reads it otherwise, and building it visits every edge of the
+        // mesh (of each block's copy, under the block driver) on every call.
         let (edges, edges_valid) = match params.target_edge_length {
             Some(_) => (Vec::new(), false),
             None => (edge_list(mesh), true),
