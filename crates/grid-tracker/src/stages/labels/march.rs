@@ -257,9 +257,8 @@ pub const NO_NODE: u32 = u32::MAX;
 pub struct FarFieldStats {
     /// Updates of all levels (work measure).
     pub updates: usize,
-    /// Nodes finalised by the fine march near the seeds.
-    pub band_nodes: usize,
-    /// Nodes beyond it, filled from the coarse march.
+    /// Nodes beyond the band of the fine march near the seeds, filled from the coarse
+    /// march.
     pub far_nodes: usize,
     /// Far nodes marched again at full resolution.
     pub refined_nodes: usize,
@@ -308,7 +307,6 @@ pub fn march_far_field(
     marching.seed(fine, points, seeds, slots);
     marching.run(fine, points, slots, band, |i| near[i as usize] = true);
     stats.updates += marching.updates;
-    stats.band_nodes = near.iter().filter(|&&b| b).count();
     if marching.heap.is_empty() {
         return stats; // nothing beyond the band
     }
