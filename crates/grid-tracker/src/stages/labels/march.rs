@@ -10,7 +10,7 @@
 //! extension).
 
 use std::cmp::Ordering;
-use std::collections::BinaryHeap;
+use std::collections::{BTreeMap, BinaryHeap};
 
 use glam::{DVec3, IVec3};
 
@@ -75,6 +75,104 @@ impl Ord for Item {
     }
 }
 
+/// The open nodes of a march, popped in exactly the order of one binary heap over all of
+/// them ((distance, node), nearest first), but held in buckets of nearby distances of
+/// which only the nearest is a heap.
+///
+/// Why: a march over a million nodes keeps hundreds of thousands of entries queued, and
+/// every pop of one heap that size sifts through levels far apart in memory (on 6 bunnies
+/// the time per update grew fourfold from 522k to 1.35M triangles). Here a pop sifts
+/// through one bucket's heap, and an entry for a later bucket is only appended to its
+/// list.
+///
+/// Buckets are ranges of the distance's bit pattern (its exponent and top mantissa bits:
+/// 256 buckets per doubling of the distance), so they need no length scale and order
+/// like the distances themselves. An entry nearer than the current bucket (a node can be
+/// offered a point nearer to it than the node offering it) joins the current heap, which
+/// stays correct: every entry of a later bucket is farther than every entry of the
+/// current one, so the current heap's top is always the nearest entry of all.
+#[derive(Debug, Default)]
+struct BucketQueue {
+    /// The entries of bucket `current` and of nearer ones pushed since it became current.
+    near: BinaryHeap<Item>,
+    /// Bucket of `near`.
+    current: u32,
+    /// Later buckets, unordered inside.
+    later: BTreeMap<u32, Vec<Item>>,
+    /// Entries held in all.
+    len: usize,
+    /// Emptied bucket lists kept for reuse, so that a march allocates a handful of them.
+    spare: Vec<Vec<Item>>,
+}
+
+impl BucketQueue {
+    /// The bucket of `distance`: a non-decreasing function of it in `f64::total_cmp`
+    /// order (negative distances, which a march never makes, all map to bucket 0).
+    #[inline]
+    fn bucket(distance: f64) -> u32 {
+        if distance.is_sign_negative() {
+            0
+        } else {
+            (distance.to_bits() >> 44) as u32
+        }
+    }
+
+    fn len(&self) -> usize {
+        self.len
+    }
+
+    fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    #[inline]
+    fn push(&mut self, item: Item) {
+        self.len += 1;
+        let b = Self::bucket(item.distance);
+        if b <= self.current {
+            self.near.push(item);
+        } else {
+            let spare = &mut self.spare;
+            self.later
+                .entry(b)
+                .or_insert_with(|| spare.pop().unwrap_or_default())
+                .push(item);
+        }
+    }
+
+    /// Makes the nearest non-empty bucket current if the current one is empty.
+    #[inline]
+    fn fill(&mut self) {
+        if !self.near.is_empty() {
+            return;
+        }
+        if let Some((b, mut items)) = self.later.pop_first() {
+            self.current = b;
+            let mut heap = std::mem::take(&mut self.near).into_vec();
+            heap.clear();
+            heap.append(&mut items);
+            self.spare.push(items);
+            self.near = BinaryHeap::from(heap);
+        }
+    }
+
+    /// The nearest entry.
+    #[inline]
+    fn peek(&mut self) -> Option<Item> {
+        self.fill();
+        self.near.peek().copied()
+    }
+
+    /// Removes the nearest entry.
+    #[inline]
+    fn pop(&mut self) -> Option<Item> {
+        self.fill();
+        let item = self.near.pop();
+        self.len -= usize::from(item.is_some());
+        item
+    }
+}
+
 /// Work bound per node: a node's distance only decreases, by taking a strictly nearer
 /// breaking point, which in practice happens a handful of times, and each decrease pushes
 /// one heap entry; past this many pops per node (plus the seeds) the marching stops,
@@ -128,14 +226,14 @@ impl Slot {
 /// the number of updates made. Shared by the plain march and the levels of the far-field
 /// march, which differ only in which nodes they start from and where they stop.
 struct Marching {
-    heap: BinaryHeap<Item>,
+    heap: BucketQueue,
     updates: usize,
 }
 
 impl Marching {
     fn new() -> Self {
         Marching {
-            heap: BinaryHeap::new(),
+            heap: BucketQueue::default(),
             updates: 0,
         }
     }
@@ -196,7 +294,7 @@ impl Marching {
     ) {
         let budget = self.heap.len() + UPDATES_PER_NODE * nodes.len();
         for _ in 0..budget {
-            let Some(&Item { distance, node }) = self.heap.peek() else {
+            let Some(Item { distance, node }) = self.heap.peek() else {
                 break;
             };
             if distance > limit {
@@ -491,4 +589,43 @@ pub fn march(
         }
     }
     updates
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The bucket queue must pop exactly what one binary heap over the same entries
+        /// pops, including entries pushed nearer than the bucket being drained (a march
+        /// offers those) and ties in distance, so that labels do not depend on it.
+        #[test]
+        fn bucket_queue_pops_like_one_heap(
+            ops in prop::collection::vec((0u8..3, 0.0f64..4.0, 0u32..50), 1..400),
+        ) {
+            let mut heap = BinaryHeap::new();
+            let mut queue = BucketQueue::default();
+            for (op, distance, node) in ops {
+                if op == 0 {
+                    prop_assert_eq!(queue.pop().map(|i| (i.distance, i.node)),
+                        heap.pop().map(|i: Item| (i.distance, i.node)));
+                } else {
+                    // Rounded distances make exact ties; tiny ones share a bucket.
+                    let distance = if op == 1 { (distance * 4.0).round() / 4.0 } else { distance * 1e-3 };
+                    let item = Item { distance, node };
+                    heap.push(item);
+                    queue.push(item);
+                }
+                prop_assert_eq!(queue.len(), heap.len());
+                prop_assert_eq!(queue.peek().map(|i| (i.distance, i.node)),
+                    heap.peek().map(|i| (i.distance, i.node)));
+            }
+            while let Some(expected) = heap.pop() {
+                let got = queue.pop().expect("queue ran out before the heap");
+                prop_assert_eq!((got.distance, got.node), (expected.distance, expected.node));
+            }
+            prop_assert!(queue.is_empty());
+        }
+    }
 }
