@@ -11,10 +11,10 @@ use common::{assert_valid, assert_volumes};
 use glam::DVec3;
 use mesh_core::geometry::label_volumes;
 use mesh_core::remesh::{
-    BlockParams, EditGuard, ImproveParams, ImproveRegion, ImproveReport, StaticIntersectionGuard,
-    VertexAttributes, improve_in, improve_in_blocks,
+    BlockJob, BlockParams, EditGuard, ImproveParams, ImproveRegion, ImproveReport,
+    StaticIntersectionGuard, VertexAttributes, improve_in, improve_in_blocks, run_in_blocks,
 };
-use mesh_core::{LabeledMesh, TriId, generators};
+use mesh_core::{LabeledMesh, TriId, VertexId, generators};
 
 /// A five-cell foam in the unit cube: label walls, triple curves and the corners where
 /// they meet, all of which a block border can cut through.
@@ -180,4 +180,36 @@ fn a_callers_fence_holds_across_blocks() {
             "fenced triangle changed: {tri}"
         );
     }
+}
+
+/// Work a block's stage leaves unfinished (here: all of it, as a stage stopped at its
+/// sweep limit before doing anything would) comes back to the caller with the work the
+/// borders held back, as global ids: dropping it would leave those places unimproved
+/// while the report says the passes converged.
+#[test]
+fn a_blocks_unfinished_work_is_handed_on() {
+    let mut m = foam();
+    let work: Vec<VertexId> = m.vertices().collect();
+    let stage = |job: BlockJob<'_>| {
+        job.unfinished.extend_from_slice(job.work);
+        ((), 0)
+    };
+    let blocks = BlockParams {
+        passes: 1,
+        ..small_blocks()
+    };
+    let (reports, mut left) = run_in_blocks(
+        &mut m,
+        &mut VertexAttributes::none(),
+        &mut None,
+        work.clone(),
+        4.0 * 0.07,
+        &blocks,
+        &exact,
+        &stage,
+    );
+    assert!(reports.len() > 20, "blocks: {}", reports.len());
+    left.sort_unstable();
+    left.dedup();
+    assert_eq!(left, work);
 }

@@ -145,6 +145,7 @@ pub fn improve_in_blocks(
                 job.guard,
                 &AreaDecrease,
                 false,
+                Some(job.unfinished),
             );
             let edits = r.edits();
             (r, edits)
@@ -189,6 +190,9 @@ pub fn improve_in_blocks(
         "improve: serial pass"
     );
     report.absorb(&last);
+    // A block stopped at the sweep limit handed its unfinished work on, so the passes
+    // converged when the last one did.
+    report.converged = last.converged;
     report.target_edge_length = last.target_edge_length;
     report.max_volume_change = last.max_volume_change;
     report.edges = last.edges;
@@ -269,6 +273,9 @@ pub struct BlockJob<'a> {
     pub globals: &'a [VertexId],
     /// The block's guard: the caller's, behind the block's fence.
     pub guard: &'a mut dyn EditGuard,
+    /// Where the stage puts vertices (local ids) whose work it left undone, e.g. when it
+    /// stopped at a sweep limit: they are handed on like those the border held back.
+    pub unfinished: &'a mut Vec<VertexId>,
 }
 
 /// Runs `stage` on blocks of space, in parallel, pass after pass (see the module doc;
@@ -340,7 +347,8 @@ struct Worked {
     inner: Vec<bool>,
     mesh: LabeledMesh,
     attrs: VertexAttributes,
-    /// Local ids of the vertices of edits refused only because of the border.
+    /// Local ids of the vertices of edits refused only because of the border, and of the
+    /// work the stage left unfinished.
     deferred: Vec<VertexId>,
     /// Edits the stage committed.
     edits: usize,
@@ -523,14 +531,17 @@ fn run_block<R>(
         .collect();
     let mut inner_guard = make_guard();
     let mut fence = FenceGuard::block(inner_guard.as_mut(), editable.clone(), held, block.bounds);
+    let mut unfinished = Vec::new();
     let (report, edits) = stage(BlockJob {
         mesh: &mut sub,
         attrs: &mut sub_attrs,
         work: &work,
         globals: &verts,
         guard: &mut fence,
+        unfinished: &mut unfinished,
     });
-    let deferred = fence.deferred().to_vec();
+    let mut deferred = fence.deferred().to_vec();
+    deferred.append(&mut unfinished);
     let worked = Worked {
         verts,
         tris: block.tris.clone(),

@@ -397,7 +397,7 @@ pub fn improve_in(
     guard: &mut dyn EditGuard,
     strength: &dyn SeparationStrength,
 ) -> ImproveReport {
-    improve_part(mesh, params, region, attrs, guard, strength, true)
+    improve_part(mesh, params, region, attrs, guard, strength, true, None)
 }
 
 /// [`improve_in`] with the end-of-run edge figures ([`ImproveReport::edges`],
@@ -405,6 +405,12 @@ pub fn improve_in(
 /// every edge of `mesh`, which for a block of [`super::blocks`] is a copy the caller
 /// throws away and measures again as a whole, so there they cost a full edge scan per
 /// block for nothing.
+///
+/// `unfinished`, when given, receives the vertices the next sweep would have worked on
+/// when the run stops at [`ImproveParams::max_sweeps`] without converging, so that a
+/// caller running more passes (blocks, then the serial pass) carries them on instead of
+/// dropping them.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn improve_part(
     mesh: &mut LabeledMesh,
     params: &ImproveParams,
@@ -413,6 +419,7 @@ pub(super) fn improve_part(
     guard: &mut dyn EditGuard,
     strength: &dyn SeparationStrength,
     edge_figures: bool,
+    unfinished: Option<&mut Vec<VertexId>>,
 ) -> ImproveReport {
     let mut run = Run::new(mesh, params);
     // Every edit goes through the recorder, which notes where the mesh changed: the work
@@ -510,6 +517,12 @@ pub(super) fn improve_part(
         if changed == 0 {
             run.report.converged = true;
             break;
+        }
+    }
+    if let Some(out) = unfinished.filter(|_| !run.report.converged) {
+        match &work {
+            Some(w) => out.extend(w.iter().copied().filter(|&v| mesh.is_vertex_alive(v))),
+            None => out.extend(mesh.vertices()),
         }
     }
     run.report.vetoes = std::mem::take(&mut recorder.vetoes);
