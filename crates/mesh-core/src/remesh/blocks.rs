@@ -23,7 +23,8 @@
 //!
 //! Edits refused only because of a block's border are handed on: a second pass on blocks
 //! shifted by half a side takes them (a border of the first is the middle of a block of
-//! the second), and a last serial pass over the whole mesh takes what is left.
+//! the second), and a last serial pass over the whole mesh takes what is left. So is the
+//! work of a block that stopped at its sweep limit ([`BlockJob::unfinished`]).
 //!
 //! Deterministic: the blocks, what each copies out, the order in which each is improved and
 //! the order of write-back depend on the mesh only, so the result is the same for any
