@@ -144,7 +144,8 @@ pub struct FixReport {
     /// Per material (label ≠ 0): the input's divergence-theorem volume (on an overlapping
     /// input, overlaps count once per material covering them) and the output's volume.
     pub volumes: Vec<LabelVolume>,
-    /// Materials of the input with no volume in the output.
+    /// Materials of the input with no volume in the output, or carried by no output
+    /// triangle (see [`MaterialLoss::vanished`]).
     pub vanished: Vec<Label>,
     /// The output's total volume against the union of the input's materials.
     pub volume_check: VolumeCheck,
@@ -179,7 +180,9 @@ pub struct FixOutcome {
 pub struct MaterialLoss {
     /// ℓ of the repair.
     pub cell_size: f64,
-    /// Vanished materials with their input volumes.
+    /// Vanished materials with their input volumes: those with a bounded volume in the
+    /// input and none in the output, and every label no output triangle carries any more
+    /// (label 0 among them when the output is empty).
     pub vanished: Vec<LabelVolume>,
     /// The total-volume check.
     pub volume: VolumeCheck,
@@ -191,6 +194,9 @@ impl std::fmt::Display for MaterialLoss {
             .vanished
             .iter()
             .map(|v| {
+                if v.label == Label::OUTSIDE {
+                    return "the output has no triangles left".to_string();
+                }
                 format!(
                     "material {} vanished (volume {:.6} in the input, {:.6} in the output)",
                     v.label.raw(),
@@ -271,6 +277,34 @@ fn check_fix_input(mesh: &LabeledMesh) -> Result<ValidationReport, FixError> {
     Ok(r)
 }
 
+/// Refuses a consistently labelled input whose unbounded outside is not label 0: a
+/// material with a negative enclosed volume (every closed shell of a material facing
+/// outward counts positive) means its faces' sides are the other way round. Why here:
+/// the repair rebuilds from the grid, whose cells outside every shell are label 0, so
+/// such an input would come back as an empty mesh; the user needs to hear that the labels
+/// are swapped, not that ℓ was too coarse. An inconsistently labelled input is left to
+/// the repair (its volumes mean nothing), and so is a clean one (returned unchanged).
+fn check_outside_label(input: &ValidationReport, census: &MaterialCensus) -> Result<(), FixError> {
+    if !input.inconsistent_edges.is_empty() {
+        return Ok(());
+    }
+    let scale: f64 = census.volumes.values().map(|v| v.abs()).sum();
+    let inverted = census
+        .volumes
+        .iter()
+        .find(|(l, v)| **l != Label::OUTSIDE && **v < -1e-9 * scale);
+    match inverted {
+        Some((label, volume)) => Err(FixError::InvalidInput(format!(
+            "material {} encloses a negative volume ({volume:.6}): its faces put it \
+             outside them, but the unbounded outside must be label 0; are the front and \
+             back labels swapped? (the front label is the material the normal \
+             (v1−v0)×(v2−v0) points into)",
+            label.raw()
+        ))),
+        None => Ok(()),
+    }
+}
+
 /// Sum of the volumes of the bounded materials (labels ≠ 0).
 fn bounded_total(census: &MaterialCensus) -> f64 {
     census
@@ -323,6 +357,8 @@ pub fn fix_with(mesh: &LabeledMesh, options: &FixOptions) -> Result<FixOutcome, 
             ));
         }
     }
+
+    check_outside_label(&input_report, &before)?;
 
     let pass = run_pass(
         mesh.clone(),
@@ -403,11 +439,21 @@ pub fn fix_with(mesh: &LabeledMesh, options: &FixOptions) -> Result<FixOutcome, 
         tolerance: options.volume_tolerance,
     };
     let volumes = before.volumes_to(&after);
-    // A material of the input with a bounded volume there and none left.
+    // A material of the input with a bounded volume there and none left, or one that no
+    // output triangle carries any more whatever its input volume: a material enclosing no
+    // volume (a flat shell) or an inconsistently labelled one (whose volume means nothing)
+    // is still the user's data, and an output that dropped every triangle lost the outside
+    // (label 0) too.
+    let gone = before.vanished_in(&after);
     let vanished: Vec<LabelVolume> = volumes
         .iter()
-        .filter(|v| v.before > 0.0 && v.after <= 0.0)
+        .filter(|v| (v.before > 0.0 && v.after <= 0.0) || gone.contains(&v.label))
         .copied()
+        .chain(gone.contains(&Label::OUTSIDE).then(|| LabelVolume {
+            label: Label::OUTSIDE,
+            before: before.volumes[&Label::OUTSIDE],
+            after: 0.0,
+        }))
         .collect();
     let mut warnings = Vec::new();
     if !vanished.is_empty() || volume_check.relative_change > volume_check.tolerance {

@@ -8,7 +8,7 @@
 
 mod common;
 
-use common::{cube, sphere, union};
+use common::{cube, inverted, sphere, union};
 use glam::DVec3;
 use grid_tracker::{
     CellSizeRule, FixError, FixOptions, FixOutcome, GridParams, GridTracker, ReferenceMethod,
@@ -286,4 +286,90 @@ fn a_material_vanishing_in_a_step_is_reported() {
         .find(|v| v.label == Label::new(2))
         .expect("2");
     assert!(v2.before > 0.02 && v2.after == 0.0, "{v2:?}");
+}
+
+/// A closed shell enclosing no volume (four coplanar points: overlapping faces, so the
+/// input needs repair) is still a material of the input: a repair that drops it is a
+/// loss naming it, though its volume was 0 before and after. And a repair left with no
+/// triangles at all says so.
+#[test]
+fn a_material_with_no_volume_that_vanishes_is_an_error_too() {
+    let flat = |dx: f64| {
+        let p = [
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(0.0, 1.0, 0.0),
+            DVec3::new(0.3, 0.3, 0.0),
+        ]
+        .map(|q| q + DVec3::new(dx, 0.0, 0.0))
+        .to_vec();
+        let t = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
+        LabeledMesh::from_raw(p, &t, &[[0, 1]; 4]).expect("flat shell")
+    };
+    let m = union(&[flat(3.0), cube(DVec3::ZERO, DVec3::ONE, 0, 2)]);
+    assert!(label_volumes(&m)[&Label::new(1)].abs() < 1e-12);
+    let options = FixOptions::default();
+    match fix_with(&m, &options) {
+        Err(FixError::Loss(loss)) => {
+            let labels: Vec<Label> = loss.vanished.iter().map(|v| v.label).collect();
+            assert_eq!(labels, vec![Label::new(1)], "{loss}");
+            assert!(loss.to_string().contains("material 1 vanished"), "{loss}");
+        }
+        other => panic!(
+            "expected a loss error, got {:?}",
+            other.map(|o| o.report.vanished)
+        ),
+    }
+    match fix_with(&flat(0.0), &options) {
+        Err(FixError::Loss(loss)) => {
+            assert!(
+                loss.vanished.iter().any(|v| v.label == Label::OUTSIDE),
+                "{loss}"
+            );
+            assert!(loss.to_string().contains("no triangles left"), "{loss}");
+        }
+        other => panic!(
+            "expected a loss error, got {:?}",
+            other.map(|o| o.report.vanished)
+        ),
+    }
+    // Opted in: the cube comes back, the loss as a warning.
+    let out = fix_with(
+        &m,
+        &FixOptions {
+            allow_loss: true,
+            ..FixOptions::default()
+        },
+    )
+    .expect("allowed loss");
+    assert_eq!(out.report.vanished, vec![Label::new(1)]);
+    assert!(out.report.validation.is_valid());
+}
+
+/// Overlapping cubes whose faces carry front and back the other way round (each label
+/// outside its own faces): an error that says so, not an empty mesh or a loss blamed on
+/// the cell size. The same cubes the right way round are repaired.
+#[test]
+fn swapped_front_and_back_labels_are_named_in_the_error() {
+    let right = union(&[
+        cube(DVec3::ZERO, DVec3::ONE, 0, 1),
+        cube(DVec3::new(0.5, 0.3, 0.2), DVec3::new(1.5, 1.3, 1.2), 0, 2),
+    ]);
+    let swapped = inverted(&right);
+    assert!(label_volumes(&swapped)[&Label::new(1)] < 0.0);
+    match fix_with(&swapped, &FixOptions::default()) {
+        Err(FixError::InvalidInput(msg)) => {
+            assert!(
+                msg.contains("material 1 encloses a negative volume"),
+                "{msg}"
+            );
+            assert!(msg.contains("swapped"), "{msg}");
+        }
+        other => panic!(
+            "expected an input error, got {:?}",
+            other.map(|o| o.report.vanished)
+        ),
+    }
+    let out = fix_default(&right);
+    assert!(out.report.vanished.is_empty());
 }
