@@ -32,9 +32,11 @@ use glam::DVec3;
 use mesh_core::generators::{
     self, GeneratorError, PlacedSphere, place_random_spheres, spheres_mesh,
 };
+use mesh_core::remesh::improve::mean_edge_length;
 use mesh_core::{Label, LabeledMesh};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use surftrack::grid_tracker::default_cell_size;
 
 use crate::flows::{
     CurlNoiseFlow, CurlNoiseParams, EnrightFlow, Flow, FlowError, Integrator, InterfaceSpeeds,
@@ -112,7 +114,7 @@ pub const SCENES: &[SceneInfo] = &[
         name: "copies",
         summary: "k rotated copies of a mesh (--mesh FILE or the notched sphere) teleported onto each other, one step (2024 paper Fig. 16)",
         steps: 1,
-        knobs: "--count k (4), --mesh FILE, --resolution = notched sphere cells (16), or with --mesh times each triangle is split in four (0), --seed",
+        knobs: "--count k (4), --mesh FILE, --resolution = notched sphere cells (16), or with --mesh times each triangle is split in four (default: until edges are no longer than the cell size `fix` would pick), --seed",
     },
     SceneInfo {
         name: "cyclic",
@@ -366,7 +368,7 @@ pub fn build_tracked_with(
             // The copies start side by side along x, apart; the single step teleports them
             // onto their rotated, overlapping positions.
             let k = o.count.unwrap_or(4);
-            let base = copies_base(o)?;
+            let base = tracked_copies_base(o, k)?;
             let target = generators::copies(&base, k, o.seed)?;
             let per_copy = base.to_raw().0.len().max(1);
             let (lo, hi) = target
@@ -448,6 +450,39 @@ fn copies_base(o: &SceneOptions) -> Result<LabeledMesh, GeneratorError> {
         Some(mesh) => generators::subdivide(mesh, o.resolution.unwrap_or(0)),
         None => generators::zalesak(o.resolution.unwrap_or(16) as usize),
     }
+}
+
+/// Most times `copies` splits a `--mesh` in four on its own (4⁶ = 4096 times the
+/// triangles).
+const MAX_COPIES_SPLITS: u32 = 6;
+
+/// Most triangles of all copies together that splitting may reach.
+const MAX_COPIES_TRIANGLES: usize = 4_000_000;
+
+/// [`copies_base`] for a run: a `--mesh` without `--resolution` is split in four until its
+/// mean edge is no longer than the cell size `fix` would pick for it (an eighth of its
+/// thinnest material's 3·volume/area, [`default_cell_size`]), within
+/// [`MAX_COPIES_SPLITS`] and [`MAX_COPIES_TRIANGLES`].
+///
+/// Why: the single step is a repair of the overlapping union, and the grid tracker takes
+/// the mean edge length as ℓ; a coarse CAD-like mesh (a 12-triangle cube: edges 1.1 for a
+/// unit of thickness) is then about one cell thick, every overlapping material is rebuilt
+/// from nodes that miss it, and all of them vanished in the first step. `generate copies`
+/// keeps the mesh as given: `fix` chooses its own ℓ.
+fn tracked_copies_base(o: &SceneOptions, k: usize) -> Result<LabeledMesh, GeneratorError> {
+    let mut base = copies_base(o)?;
+    if o.mesh.is_none() || o.resolution.is_some() {
+        return Ok(base);
+    }
+    let wanted = default_cell_size(&base).cell_size;
+    for _ in 0..MAX_COPIES_SPLITS {
+        let fine_enough = mean_edge_length(&base) <= wanted * (1.0 + 1e-9);
+        if fine_enough || 4 * base.num_triangles() * k.max(1) > MAX_COPIES_TRIANGLES {
+            break;
+        }
+        base = generators::subdivide(&base, 1)?;
+    }
+    Ok(base)
 }
 
 /// The remeshing benchmark's scene (`benches/remesh.rs`, `examples/remesh.rs`):
@@ -546,6 +581,50 @@ mod tests {
         assert_eq!(scene.mesh.position(first), union.position(first));
         let shift = scene.mesh.position(second) - union.position(second);
         assert!(shift.x > 0.0 && shift.y == 0.0 && shift.z == 0.0);
+    }
+
+    /// A coarse CAD-like mesh (a 12-triangle unit cube) copied onto itself: the run's
+    /// copies are split until their edges fit the cell size `fix` would pick (1/16), so
+    /// the grid tracker's one step keeps every material, where at the cube's own edges
+    /// (ℓ ≈ 1.1) all of them vanished. `generate copies` keeps the cube as given.
+    #[test]
+    fn copies_of_a_coarse_mesh_are_refined_so_that_no_material_vanishes() {
+        use mesh_core::SurfaceTracker;
+        let p: Vec<DVec3> = (0..8)
+            .map(|i| DVec3::new((i & 1) as f64, ((i >> 1) & 1) as f64, ((i >> 2) & 1) as f64))
+            .collect();
+        let quads = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        let t: Vec<[u32; 3]> = quads
+            .iter()
+            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+            .collect();
+        let cube = LabeledMesh::from_raw(p, &t, &[[0, 1]; 12]).unwrap();
+        let o = SceneOptions {
+            count: Some(3),
+            mesh: Some(cube),
+            ..SceneOptions::default()
+        };
+        assert_eq!(build_scene("copies", &o).unwrap().num_triangles(), 3 * 12);
+        let scene = build_tracked("copies", &o).unwrap();
+        assert_eq!(scene.mesh.num_triangles(), 3 * 12 * 4usize.pow(5));
+        let mut tracker = surftrack::grid_tracker::GridTracker::new(
+            scene.mesh.clone(),
+            surftrack::grid_tracker::GridParams::default(),
+        )
+        .unwrap();
+        let proposed = scene.flow.propose(&scene.mesh, 0.0, scene.dt);
+        let report = tracker.advance(&proposed).unwrap();
+        assert!(report.events.vanished.is_empty(), "{:?}", report.events);
+        for v in &report.volumes {
+            assert!(v.after > 0.1 * v.before, "{v:?}");
+        }
     }
 
     /// With `--mesh`, `--resolution` splits the given mesh's triangles in four that many
