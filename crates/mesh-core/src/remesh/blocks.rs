@@ -42,11 +42,11 @@ use crate::ids::{Label, TriId, VertexId};
 use crate::mesh::LabeledMesh;
 
 use super::attributes::VertexAttributes;
+use super::features;
 use super::fence::FenceGuard;
 use super::guard::EditGuard;
 use super::improve::{
-    ImproveParams, ImproveRegion, ImproveReport, improve_in, improve_part, initial_work,
-    mean_edge_length,
+    ImproveParams, ImproveRegion, ImproveReport, improve_part, initial_work, mean_edge_length,
 };
 use super::separate::AreaDecrease;
 
@@ -134,6 +134,7 @@ pub fn improve_in_blocks(
         ..Default::default()
     };
     let side = blocks.block_edges * target;
+    let caps = features::material_caps(mesh, params.max_material_share);
     // The serial pass's work: what the block passes left, or the region when none ran.
     let mut left: Option<Vec<VertexId>> = None;
     if blocks.runs(side) {
@@ -147,6 +148,7 @@ pub fn improve_in_blocks(
                 &AreaDecrease,
                 false,
                 Some(job.unfinished),
+                &caps,
             );
             let edits = r.edits();
             (r, edits)
@@ -174,16 +176,22 @@ pub fn improve_in_blocks(
     };
     let t0 = std::time::Instant::now();
     let mut inner = make_guard();
-    let last = match editable {
-        Some(e) => improve_in(
+    let serial = |mesh: &mut LabeledMesh, attrs: &mut VertexAttributes, g: &mut dyn EditGuard| {
+        improve_part(
             mesh,
             &params,
             region,
             attrs,
-            &mut FenceGuard::new(inner.as_mut(), e),
+            g,
             &AreaDecrease,
-        ),
-        None => improve_in(mesh, &params, region, attrs, inner.as_mut(), &AreaDecrease),
+            true,
+            None,
+            &caps,
+        )
+    };
+    let last = match editable {
+        Some(e) => serial(mesh, attrs, &mut FenceGuard::new(inner.as_mut(), e)),
+        None => serial(mesh, attrs, inner.as_mut()),
     };
     tracing::debug!(
         edits = last.edits(),

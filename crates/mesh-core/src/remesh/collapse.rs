@@ -129,6 +129,11 @@ pub enum CollapseRefusal {
     /// A label volume would change by more than Ω.
     #[error("volume change above the limit")]
     VolumeChange,
+    /// A material's volume would change by more than its share
+    /// ([`super::ImproveParams::max_material_share`]): the material is too thin for the
+    /// target edge length, and the collapse would flatten it.
+    #[error("would change a thin material's volume by more than its share")]
+    MaterialShare,
 }
 
 /// Why [`collapse_edge`] failed; the mesh is unchanged.
@@ -156,6 +161,7 @@ impl CollapseError {
                 CollapseRefusal::NormalChange => "normal change",
                 CollapseRefusal::EdgeLength => "edge length",
                 CollapseRefusal::VolumeChange => "volume change",
+                CollapseRefusal::MaterialShare => "material share",
             },
             CollapseError::Edit(e) => e.reason(),
         }
@@ -200,6 +206,9 @@ pub(crate) struct CollapseScratch {
     nbr_a: Vec<VertexId>,
     tris: Vec<TriId>,
     volumes: Vec<(Label, f64)>,
+    /// Per material, the largest volume change one collapse may cause besides Ω (see
+    /// [`CollapseRefusal::MaterialShare`]); empty: none.
+    pub(crate) caps: Vec<(Label, f64)>,
 }
 
 /// Collapses edge `{a, b}` onto `a`, removing `b` (see the module doc). The attributes of
@@ -338,6 +347,9 @@ pub(crate) fn collapse_edge_in(
     let dv = features::max_label_volume_change(mesh, edit, &mut s.volumes);
     if dv > params.max_volume_change {
         return Err(CollapseRefusal::VolumeChange.into());
+    }
+    if features::exceeds_caps(&s.volumes, &s.caps) {
+        return Err(CollapseRefusal::MaterialShare.into());
     }
     apply_edit(mesh, attrs, guard, edit)?;
     Ok(dv)

@@ -379,6 +379,55 @@ pub fn classify_vertices(mesh: &LabeledMesh, params: &FeatureParams) -> Vec<Vert
 /// cone volume to its back label and subtracts it from its front label, as in
 /// [`geometry::label_volumes`]). `buf` is scratch space.
 ///
+/// Whether any label's change in `changes` (as [`max_label_volume_change`] leaves them in
+/// its buffer) exceeds that label's cap in `caps` (sorted by label; a label without a
+/// cap is unbounded).
+pub(crate) fn exceeds_caps(changes: &[(Label, f64)], caps: &[(Label, f64)]) -> bool {
+    !caps.is_empty()
+        && changes.iter().any(|&(l, dv)| {
+            caps.binary_search_by_key(&l, |c| c.0)
+                .is_ok_and(|i| dv.abs() > caps[i].1)
+        })
+}
+
+/// The caps of [`exceeds_caps`] for `mesh`: `share` of the volume of each bounded
+/// material that is *thin and extended* — its area at least [`EXTENDED_AREA_RATIO`] times
+/// that of a ball of its own thickness `t = 3V/A` (a ball: 1; a cube: 1.9; a plate 2.2 ×
+/// 1 × 0.2: 8.5). Label 0, the outside, and materials of no positive volume have none.
+///
+/// Why not every material: a compact material shrinking under the flow (a foam cell
+/// before its T2) must be coarsened by collapses that each take a large share of it until
+/// it is small enough to remove; a plate thinner than the target edge must not be.
+pub(crate) fn material_caps(mesh: &LabeledMesh, share: f64) -> Vec<(Label, f64)> {
+    if !(share.is_finite() && share > 0.0) {
+        return Vec::new();
+    }
+    let mut area: std::collections::BTreeMap<Label, f64> = std::collections::BTreeMap::new();
+    for t in mesh.triangles() {
+        let a = geometry::triangle_area(&mesh.tri_positions(t));
+        let [f, b] = mesh.labels(t);
+        *area.entry(f).or_default() += a;
+        if b != f {
+            *area.entry(b).or_default() += a;
+        }
+    }
+    geometry::label_volumes(mesh)
+        .into_iter()
+        .filter(|&(l, v)| {
+            let a = area.get(&l).copied().unwrap_or(0.0);
+            let t = 3.0 * v / a.max(f64::MIN_POSITIVE);
+            l != Label::OUTSIDE
+                && v > 0.0
+                && a >= EXTENDED_AREA_RATIO * 4.0 * std::f64::consts::PI * t * t
+        })
+        .map(|(l, v)| (l, share * v))
+        .collect()
+}
+
+/// See [`material_caps`]: 4 keeps every roughly round material (cubes, foam cells, their
+/// elongated cousins up to about 3:1) free of the cap.
+const EXTENDED_AREA_RATIO: f64 = 4.0;
+
 /// Public because every operation bounded by Ω needs it, in mesh-core and in the
 /// backends' own edits (the collision tracker's wall relaxation).
 pub fn max_label_volume_change(
