@@ -1,7 +1,7 @@
 //! Test scenes shared by the unit tests: spheres, boxes, unions of meshes.
 
 use glam::DVec3;
-use mesh_core::generators::icosphere;
+use mesh_core::generators::{cuboid, icosphere};
 use mesh_core::{Label, LabeledMesh};
 
 /// An icosphere with `[outside, inside]` labels.
@@ -39,28 +39,5 @@ pub fn inverted(m: &LabeledMesh) -> LabeledMesh {
 /// The axis-aligned box `[lo, hi]` as 12 outward-facing triangles, labels
 /// `[outside, inside]`.
 pub fn cube(lo: DVec3, hi: DVec3, outside: u32, inside: u32) -> LabeledMesh {
-    let p: Vec<DVec3> = (0..8)
-        .map(|i| {
-            DVec3::new(
-                if i & 1 == 0 { lo.x } else { hi.x },
-                if i & 2 == 0 { lo.y } else { hi.y },
-                if i & 4 == 0 { lo.z } else { hi.z },
-            )
-        })
-        .collect();
-    // Quads listed counter-clockwise seen from outside.
-    let quads = [
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-    ];
-    let tris: Vec<[u32; 3]> = quads
-        .iter()
-        .flat_map(|&[a, b, c, d]| [[a, b, c], [a, c, d]])
-        .collect();
-    let labels = vec![[outside, inside]; tris.len()];
-    LabeledMesh::from_raw(p, &tris, &labels).expect("valid cube")
+    cuboid(lo, hi, [Label::new(outside), Label::new(inside)]).expect("valid cube")
 }

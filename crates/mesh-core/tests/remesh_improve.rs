@@ -479,28 +479,7 @@ fn throughput_large_noisy_sphere() {
 #[test]
 fn a_material_thinner_than_the_target_edge_is_not_flattened() {
     let boxed = |lo: DVec3, hi: DVec3, label: u32| {
-        let p: Vec<DVec3> = (0..8)
-            .map(|i| {
-                DVec3::new(
-                    if i & 1 == 0 { lo.x } else { hi.x },
-                    if i & 2 == 0 { lo.y } else { hi.y },
-                    if i & 4 == 0 { lo.z } else { hi.z },
-                )
-            })
-            .collect();
-        let quads = [
-            [0, 2, 3, 1],
-            [4, 5, 7, 6],
-            [0, 1, 5, 4],
-            [2, 6, 7, 3],
-            [0, 4, 6, 2],
-            [1, 3, 7, 5],
-        ];
-        let t: Vec<[u32; 3]> = quads
-            .iter()
-            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
-            .collect();
-        LabeledMesh::from_raw(p, &t, &[[0, label]; 12]).expect("box")
+        generators::cuboid(lo, hi, [Label::OUTSIDE, Label::new(label)]).expect("box")
     };
     let (p1, t1, l1) = boxed(DVec3::ZERO, DVec3::ONE, 1).to_raw();
     let (p2, t2, l2) = boxed(DVec3::new(0.0, 0.0, 1.2), DVec3::new(2.2, 1.0, 1.4), 2).to_raw();

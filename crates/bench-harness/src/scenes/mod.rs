@@ -590,22 +590,8 @@ mod tests {
     #[test]
     fn copies_of_a_coarse_mesh_are_refined_so_that_no_material_vanishes() {
         use mesh_core::SurfaceTracker;
-        let p: Vec<DVec3> = (0..8)
-            .map(|i| DVec3::new((i & 1) as f64, ((i >> 1) & 1) as f64, ((i >> 2) & 1) as f64))
-            .collect();
-        let quads = [
-            [0, 2, 3, 1],
-            [4, 5, 7, 6],
-            [0, 1, 5, 4],
-            [2, 6, 7, 3],
-            [0, 4, 6, 2],
-            [1, 3, 7, 5],
-        ];
-        let t: Vec<[u32; 3]> = quads
-            .iter()
-            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
-            .collect();
-        let cube = LabeledMesh::from_raw(p, &t, &[[0, 1]; 12]).unwrap();
+        let cube =
+            generators::cuboid(DVec3::ZERO, DVec3::ONE, [Label::OUTSIDE, Label::new(1)]).unwrap();
         let o = SceneOptions {
             count: Some(3),
             mesh: Some(cube),

@@ -23,6 +23,7 @@
 
 mod bubble;
 mod copies;
+mod cuboid;
 mod error;
 mod icosphere;
 mod implicit;
@@ -36,6 +37,7 @@ mod checks;
 
 pub use bubble::double_bubble;
 pub use copies::{copies, copies_with_rotations};
+pub use cuboid::cuboid;
 pub use error::GeneratorError;
 pub use icosphere::{MAX_SUBDIVISIONS, icosphere};
 pub use implicit::{EDGE_MARGIN, MAX_CELLS_PER_AXIS, mesh_implicit};
