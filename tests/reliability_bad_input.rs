@@ -400,6 +400,7 @@ property float z\nelement face 4\nproperty list uchar int vertex_indices\nend_he
 0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n";
     let strict = ReadOptions {
         unlabeled: Unlabeled::Error,
+        ..ReadOptions::default()
     };
     assert!(matches!(
         read_ply(&unlabeled[..], &strict).unwrap_err().kind,

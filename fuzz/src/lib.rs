@@ -177,20 +177,24 @@ pub fn assert_same_mesh(a: &LabeledMesh, b: &LabeledMesh, what: &str) {
     assert_eq!(la, lb, "{what}: labels differ");
 }
 
-/// The PLY reader under every unlabelled-file policy: no panic, exact round trips.
+/// The PLY reader under every unlabelled-file policy, stitched or not: no panic, exact round trips.
 pub fn check_ply(data: &[u8]) {
     for unlabeled in [Unlabeled::ClosedTwoMaterial, Unlabeled::AssumeOutward] {
-        if let Ok(mesh) = read_ply(data, &ReadOptions { unlabeled }) {
-            assert_round_trip(&mesh);
+        for stitch in [false, true] {
+            if let Ok(mesh) = read_ply(data, &ReadOptions { unlabeled, stitch }) {
+                assert_round_trip(&mesh);
+            }
         }
     }
 }
 
-/// The OBJ reader under every unlabelled-file policy: no panic, exact round trips.
+/// The OBJ reader under every unlabelled-file policy, stitched or not: no panic, exact round trips.
 pub fn check_obj(data: &[u8]) {
     for unlabeled in [Unlabeled::ClosedTwoMaterial, Unlabeled::AssumeOutward] {
-        if let Ok(mesh) = read_obj(data, &ReadOptions { unlabeled }) {
-            assert_round_trip(&mesh);
+        for stitch in [false, true] {
+            if let Ok(mesh) = read_obj(data, &ReadOptions { unlabeled, stitch }) {
+                assert_round_trip(&mesh);
+            }
         }
     }
 }

@@ -322,3 +322,67 @@ fn unwritable_outputs_exit_2() {
         "validate ok",
     );
 }
+
+/// A triangle soup (every face on its own vertices, as STL-style exporters write it):
+/// `validate` reports the file as written and hints at stitching; `fix` and `run --mesh`
+/// stitch it into the closed solid, labelled or not, and say so.
+#[test]
+fn triangle_soups_are_stitched_by_the_working_commands() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let corners = ["0 0 0", "1 0 0", "0 1 0", "0 0 1"];
+    let faces = [[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]];
+    let (mut ply_verts, mut ply_faces, mut obj) = (String::new(), String::new(), String::new());
+    for (k, f) in faces.iter().enumerate() {
+        for &v in f {
+            ply_verts += &format!("{}\n", corners[v]);
+            obj += &format!("v {}\n", corners[v]);
+        }
+        ply_faces += &format!("3 {} {} {} 0 1\n", 3 * k, 3 * k + 1, 3 * k + 2);
+        obj += &format!("f {} {} {}\n", 3 * k + 1, 3 * k + 2, 3 * k + 3);
+    }
+    let header = HEADER.replace("vertex 4", "vertex 12");
+    let labelled = write(
+        d,
+        "soup.ply",
+        format!("{header}{ply_verts}{ply_faces}").as_bytes(),
+    );
+    let unlabelled = write(d, "soup.obj", obj.as_bytes());
+    for (path, code) in [(&labelled, 1), (&unlabelled, 2)] {
+        let p = path.to_str().unwrap();
+        expect(
+            &surftrack(&["validate", p], d),
+            code,
+            &["8 vertices repeat", "stitch"],
+            &format!("validate {p}"),
+        );
+        let out = surftrack(&["fix", p, "fixed.ply"], d);
+        expect(&out, 0, &["stitched 8 vertices"], &format!("fix {p}"));
+        let out = surftrack(&["validate", "fixed.ply", "--json"], d);
+        expect(&out, 0, &[], "validate fixed");
+        let record: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(record["vertices"], 4, "{record}");
+        assert_eq!(record["triangles"], 4, "{record}");
+        assert_eq!(record["stitchable_vertices"], 0, "{record}");
+        let out = surftrack(
+            &[
+                "run",
+                "--mesh",
+                p,
+                "--flow",
+                "rotation",
+                "--tracker",
+                "collision",
+                "--steps",
+                "2",
+            ],
+            d,
+        );
+        expect(
+            &out,
+            0,
+            &["stitched 8 vertices"],
+            &format!("run --mesh {p}"),
+        );
+    }
+}

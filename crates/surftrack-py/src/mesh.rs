@@ -9,7 +9,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use surftrack::grid_tracker::{FixError, FixOptions, FixReport, fix_with};
 use surftrack::mesh_core::geometry::label_volumes;
-use surftrack::mesh_core::io::{read_mesh, write_mesh};
+use surftrack::mesh_core::io::{ReadOptions, read_mesh_with, write_mesh};
 use surftrack::mesh_core::validate::{ValidateOptions, ValidationReport, validate};
 use surftrack::mesh_core::{LabeledMesh, MeshError};
 
@@ -63,15 +63,23 @@ impl PyMesh {
         Ok(Self::new_from(mesh))
     }
 
-    /// Mesh.read(path): reads a PLY (labels as face properties label_front/label_back) or
-    /// OBJ (usemtl label_<front>_<back>) file; a file without labels must be a closed
-    /// surface and reads as inside 1, outside 0. Raises OSError naming the problem.
+    /// Mesh.read(path, stitch=False): reads a PLY (labels as face properties
+    /// label_front/label_back) or OBJ (usemtl label_<front>_<back>) file; a file without
+    /// labels must be a closed surface and reads as inside 1, outside 0. With stitch=True,
+    /// vertices repeated at one position on open edges (every face on its own vertices,
+    /// as STL-style exporters write them) become one first. Raises OSError naming the
+    /// problem.
     #[staticmethod]
-    fn read(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+    #[pyo3(signature = (path, stitch = false))]
+    fn read(py: Python<'_>, path: PathBuf, stitch: bool) -> PyResult<Self> {
         let name = path.display().to_string();
+        let options = ReadOptions {
+            stitch,
+            ..ReadOptions::default()
+        };
         py.detach(|| {
             guarded("Mesh.read", || {
-                read_mesh(&path)
+                read_mesh_with(&path, &options)
                     .map(Self::new_from)
                     .map_err(|e| os_error(&name, e))
             })

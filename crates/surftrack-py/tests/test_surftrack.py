@@ -53,6 +53,22 @@ def test_arrays_round_trip_with_their_dtypes_and_shapes():
     assert back.validate().valid
 
 
+def test_read_stitches_a_triangle_soup_when_asked(tmp_path):
+    # A tetrahedron with every face on its own vertices, unlabelled: open as written.
+    corners = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+    faces = [[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]]
+    lines = [f"v {x} {y} {z}" for f in faces for (x, y, z) in corners[f]]
+    lines += [f"f {3 * k + 1} {3 * k + 2} {3 * k + 3}" for k in range(4)]
+    path = tmp_path / "soup.obj"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(OSError, match="only one triangle"):
+        surftrack.Mesh.read(path)
+    m = surftrack.Mesh.read(path, stitch=True)
+    assert (m.num_vertices, m.num_triangles) == (4, 4)
+    assert m.validate().valid
+    assert sorted(map(tuple, m.labels)) == [(0, 1)] * 4
+
+
 @pytest.mark.parametrize("ext", ["ply", "obj"])
 def test_files_round_trip(tmp_path, ext):
     m = surftrack.generate("double-bubble", resolution=8)

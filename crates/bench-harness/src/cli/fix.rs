@@ -26,7 +26,7 @@ struct FixRecord<'a> {
 }
 
 pub(super) fn run(args: &FixArgs) -> anyhow::Result<ExitCode> {
-    let mesh = match mesh_core::io::read_mesh(&args.input) {
+    let mesh = match super::read_work_mesh(&args.input) {
         Ok(mesh) => mesh,
         Err(err) => {
             report_error(args, &err.to_string());

@@ -11,7 +11,7 @@ use super::GenerateArgs;
 pub(super) fn run(args: &GenerateArgs) -> anyhow::Result<ExitCode> {
     let copies_input = match &args.mesh {
         Some(path) => Some(
-            mesh_core::io::read_mesh(path)
+            super::read_work_mesh(path)
                 .with_context(|| format!("reading --mesh {}", path.display()))?,
         ),
         None => None,

@@ -121,7 +121,9 @@ spacing, output, relative_change, tolerance}, warnings.";
 /// Arguments of `surftrack fix`.
 #[derive(Debug, Args)]
 pub struct FixArgs {
-    /// Input mesh (.ply or .obj; unlabelled closed meshes are read as inside 1 / outside 0).
+    /// Input mesh (.ply or .obj; unlabelled closed meshes are read as inside 1 / outside 0;
+    /// vertices repeated at one position on open edges, as STL-style exports write them,
+    /// are stitched first).
     pub input: PathBuf,
     /// Output mesh (.ply or .obj).
     pub output: PathBuf,
@@ -607,6 +609,29 @@ pub struct ConvertArgs {
     /// Write binary PLY instead of ASCII.
     #[arg(long)]
     pub binary: bool,
+}
+
+/// Reads a mesh a command is about to work on (`fix`, `run --mesh`, `generate --mesh`,
+/// `bench scaling --mesh`): vertices repeated at the same position on open edges are
+/// stitched ([`mesh_core::io::ReadOptions::stitch`]: the per-face vertices of STL-style
+/// exports), and stderr says how many. `validate` and `convert` read files as they are.
+fn read_work_mesh(
+    path: &std::path::Path,
+) -> Result<mesh_core::LabeledMesh, mesh_core::io::IoError> {
+    let options = mesh_core::io::ReadOptions {
+        stitch: true,
+        ..Default::default()
+    };
+    let (mesh, report) = mesh_core::io::read_mesh_reported(path, &options)?;
+    if report.stitched_vertices > 0 {
+        eprintln!(
+            "{}: stitched {} vertices that repeat another one's position on an open edge \
+             (per-face vertices, as STL-style exporters write them)",
+            path.display(),
+            report.stitched_vertices
+        );
+    }
+    Ok(mesh)
 }
 
 /// Writes a mesh by extension; PLY is ASCII unless `binary`.

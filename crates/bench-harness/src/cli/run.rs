@@ -28,7 +28,7 @@ const HANG_LIMIT: Duration = Duration::from_secs(600);
 pub(super) fn scene_options(args: &SceneArgs, seed: u64) -> anyhow::Result<SceneOptions> {
     let mesh = match &args.mesh {
         Some(path) => Some(
-            mesh_core::io::read_mesh(path)
+            super::read_work_mesh(path)
                 .with_context(|| format!("reading --mesh {}", path.display()))?,
         ),
         None => None,

@@ -85,7 +85,7 @@ pub(super) fn run(args: &ScalingArgs) -> anyhow::Result<ExitCode> {
     }
     let base_mesh = match &args.mesh {
         Some(path) => {
-            let mesh = mesh_core::io::read_mesh(path)
+            let mesh = super::read_work_mesh(path)
                 .with_context(|| format!("reading --mesh {}", path.display()))?;
             let name = path.file_name().map_or_else(
                 || path.display().to_string(),

@@ -1,9 +1,11 @@
 //! `surftrack validate FILE [--intersections] [--json]`.
 
 use std::collections::BTreeMap;
+use std::path::Path;
 use std::process::ExitCode;
 
 use mesh_core::geometry::label_volumes;
+use mesh_core::io::{ReadOptions, read_mesh_reported};
 use mesh_core::validate::{ValidateOptions, validate};
 use serde::Serialize;
 
@@ -28,19 +30,52 @@ struct ValidateRecord {
     #[serde(skip_serializing_if = "Option::is_none")]
     self_intersecting_pairs: Option<usize>,
     volumes: BTreeMap<String, f64>,
+    /// Vertices `fix` and `run --mesh` would stitch (repeated positions on open edges).
+    stitchable_vertices: usize,
     valid: bool,
     report: mesh_core::validate::ValidationReport,
+}
+
+/// How many vertices the working commands would stitch in `path` (0 if none, or if it
+/// does not read even so): validation reports the file as written, this says whether a
+/// broken-looking file is only a triangle soup.
+fn stitchable_vertices(path: &Path) -> usize {
+    let stitch = ReadOptions {
+        stitch: true,
+        ..ReadOptions::default()
+    };
+    read_mesh_reported(path, &stitch).map_or(0, |(_, report)| report.stitched_vertices)
+}
+
+/// The hint shown under an invalid or unreadable file that stitching would change.
+fn stitch_hint(stitchable: usize) -> Option<String> {
+    (stitchable > 0).then(|| {
+        format!(
+            "hint: {stitchable} vertices repeat another one's position on an open edge \
+             (per-face vertices, as STL-style exporters write them); `surftrack fix` and \
+             `run --mesh` stitch them"
+        )
+    })
 }
 
 pub(super) fn run(args: &ValidateArgs) -> anyhow::Result<ExitCode> {
     let mesh = match mesh_core::io::read_mesh(&args.file) {
         Ok(mesh) => mesh,
         Err(err) => {
+            let stitchable = stitchable_vertices(&args.file);
             if args.json {
-                let record = serde_json::json!({ "file": args.file.display().to_string(), "error": err.to_string(), "valid": false });
+                let record = serde_json::json!({
+                    "file": args.file.display().to_string(),
+                    "error": err.to_string(),
+                    "stitchable_vertices": stitchable,
+                    "valid": false,
+                });
                 println!("{record}");
             } else {
                 eprintln!("error: {err}");
+                if let Some(hint) = stitch_hint(stitchable) {
+                    eprintln!("{hint}");
+                }
             }
             return Ok(ExitCode::from(2));
         }
@@ -51,6 +86,11 @@ pub(super) fn run(args: &ValidateArgs) -> anyhow::Result<ExitCode> {
     };
     let report = validate(&mesh, &options);
     let valid = report.is_valid();
+    let stitchable = if report.boundary_edges.count > 0 {
+        stitchable_vertices(&args.file)
+    } else {
+        0
+    };
     let volumes = label_volumes(&mesh)
         .into_iter()
         .map(|(label, volume)| (label.raw().to_string(), volume))
@@ -72,6 +112,7 @@ pub(super) fn run(args: &ValidateArgs) -> anyhow::Result<ExitCode> {
             non_manifold_edges: report.non_manifold_edges,
             self_intersecting_pairs: report.self_intersecting_pairs.as_ref().map(|l| l.count),
             volumes,
+            stitchable_vertices: stitchable,
             valid,
             report,
         };
@@ -82,6 +123,9 @@ pub(super) fn run(args: &ValidateArgs) -> anyhow::Result<ExitCode> {
             println!("  volume of label {label}: {volume:.9}");
         }
         println!("{}", if valid { "valid" } else { "INVALID" });
+        if let Some(hint) = stitch_hint(stitchable) {
+            println!("{hint}");
+        }
     }
     Ok(if valid {
         ExitCode::SUCCESS

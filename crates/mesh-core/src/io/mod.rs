@@ -68,6 +68,7 @@ mod obj;
 mod ply_header;
 mod ply_read;
 mod ply_write;
+mod stitch;
 mod text;
 mod unlabeled;
 
@@ -110,6 +111,19 @@ pub enum Unlabeled {
 pub struct ReadOptions {
     /// Treatment of files without labels.
     pub unlabeled: Unlabeled,
+    /// Merge vertices at exactly the same position that lie on open edges (files that
+    /// give every triangle its own vertices, as STL-style exporters do), before labels
+    /// are settled; a closed mesh is never changed. Off by default, so that a reader
+    /// returns what the file says; the command line's repair and run commands turn it
+    /// on. [`read_mesh_reported`] says how many vertices were merged.
+    pub stitch: bool,
+}
+
+/// What reading changed besides parsing ([`read_mesh_reported`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ReadReport {
+    /// Vertices merged into a coincident one on an open edge ([`ReadOptions::stitch`]).
+    pub stitched_vertices: usize,
 }
 
 /// The file formats, chosen by extension.
@@ -146,15 +160,24 @@ pub fn read_mesh(path: &Path) -> Result<LabeledMesh, IoError> {
 
 /// Reads a `.ply` or `.obj` file (chosen by extension, case-insensitive).
 pub fn read_mesh_with(path: &Path, options: &ReadOptions) -> Result<LabeledMesh, IoError> {
+    read_mesh_reported(path, options).map(|(mesh, _)| mesh)
+}
+
+/// [`read_mesh_with`], also saying what reading changed (vertices stitched).
+pub fn read_mesh_reported(
+    path: &Path,
+    options: &ReadOptions,
+) -> Result<(LabeledMesh, ReadReport), IoError> {
     let format = MeshFormat::from_path(path)?;
     if path.is_dir() {
         return Err(IoError::at_path(path, IoErrorKind::IsDirectory));
     }
     let bytes = std::fs::read(path).map_err(|e| IoError::at_path(path, IoErrorKind::Io(e)))?;
     match format {
-        MeshFormat::Ply => ply_read::ply_from_bytes(&bytes, options),
-        MeshFormat::Obj => obj::obj_from_bytes(&bytes, options),
+        MeshFormat::Ply => ply_read::parse_ply(&bytes),
+        MeshFormat::Obj => obj::parse_obj(&bytes),
     }
+    .and_then(|raw| raw.into_mesh(options))
     .map_err(|kind| IoError::at_path(path, kind))
 }
 
@@ -183,8 +206,16 @@ pub(crate) struct RawMesh {
 }
 
 impl RawMesh {
-    /// Builds the mesh, settling missing labels as `options` say.
-    pub(crate) fn into_mesh(self, options: &ReadOptions) -> Result<LabeledMesh, IoErrorKind> {
+    /// Builds the mesh, stitching and settling missing labels as `options` say.
+    pub(crate) fn into_mesh(
+        mut self,
+        options: &ReadOptions,
+    ) -> Result<(LabeledMesh, ReadReport), IoErrorKind> {
+        let stitched_vertices = if options.stitch {
+            stitch::stitch_open_vertices(&mut self.positions, &mut self.tris)
+        } else {
+            0
+        };
         let check_closed =
             self.labels.is_none() && options.unlabeled == Unlabeled::ClosedTwoMaterial;
         let labels = match self.labels {
@@ -197,7 +228,7 @@ impl RawMesh {
         if check_closed {
             unlabeled::label_closed_components(&mut mesh)?;
         }
-        Ok(mesh)
+        Ok((mesh, ReadReport { stitched_vertices }))
     }
 }
 
@@ -299,6 +330,7 @@ element face 4\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0
         assert_eq!(closed.to_raw().2, vec![[0, 1]; 4]);
         let error = ReadOptions {
             unlabeled: Unlabeled::Error,
+            ..ReadOptions::default()
         };
         assert!(matches!(
             read_ply(&ply[..], &error).unwrap_err().kind,
@@ -320,10 +352,59 @@ element face 4\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0
         );
         let assume = ReadOptions {
             unlabeled: Unlabeled::AssumeOutward,
+            ..ReadOptions::default()
         };
         assert_eq!(
             read_ply(open.as_bytes(), &assume).unwrap().to_raw().2,
             vec![[0, 1]; 3]
         );
+    }
+
+    #[test]
+    fn stitching_reads_a_triangle_soup_as_the_closed_solid() {
+        // The outward tetrahedron of `unlabeled_policies`, every face on its own vertices
+        // (as STL-style exporters write it), unlabelled OBJ.
+        let corners = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ];
+        let faces = [[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]];
+        let mut obj = String::new();
+        for (k, f) in faces.iter().enumerate() {
+            for &v in f {
+                let [x, y, z] = corners[v];
+                obj += &format!("v {x} {y} {z}\n");
+            }
+            obj += &format!("f {} {} {}\n", 3 * k + 1, 3 * k + 2, 3 * k + 3);
+        }
+        let dir = tmp();
+        let path = dir.path().join("soup.obj");
+        std::fs::write(&path, &obj).unwrap();
+        // As written, every edge is open.
+        let e = read_mesh(&path).unwrap_err();
+        assert!(
+            matches!(
+                e.kind,
+                IoErrorKind::NotClosed {
+                    problem: EdgeProblem::Boundary,
+                    ..
+                }
+            ),
+            "{e}"
+        );
+        // Stitched: the closed tetrahedron, inside 1, with its 4 vertices.
+        let stitch = ReadOptions {
+            stitch: true,
+            ..ReadOptions::default()
+        };
+        let (mesh, report) = read_mesh_reported(&path, &stitch).unwrap();
+        assert_eq!(report.stitched_vertices, 12 - 4);
+        let (positions, tris, labels) = mesh.to_raw();
+        assert_eq!(positions.len(), 4);
+        assert_eq!(labels, vec![[0, 1]; 4]);
+        assert_eq!(tris, vec![[0, 1, 2], [0, 2, 3], [2, 1, 3], [0, 3, 1]]);
+        assert!(crate::validate::validate(&mesh, &Default::default()).is_valid());
     }
 }

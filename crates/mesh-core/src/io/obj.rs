@@ -27,7 +27,7 @@ pub(crate) fn obj_from_bytes(
     bytes: &[u8],
     options: &ReadOptions,
 ) -> Result<LabeledMesh, IoErrorKind> {
-    parse_obj(bytes)?.into_mesh(options)
+    parse_obj(bytes)?.into_mesh(options).map(|(mesh, _)| mesh)
 }
 
 /// The label pair named by a `usemtl` material, `None` for a non-label material.

@@ -61,6 +61,7 @@ fn open_or_inconsistent_unlabelled_obj_is_a_typed_error() {
     ));
     let assume = ReadOptions {
         unlabeled: Unlabeled::AssumeOutward,
+        ..ReadOptions::default()
     };
     assert_eq!(
         obj_from_bytes(open.as_bytes(), &assume).unwrap().to_raw().2,

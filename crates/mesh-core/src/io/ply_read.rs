@@ -35,7 +35,7 @@ pub(crate) fn ply_from_bytes(
     bytes: &[u8],
     options: &ReadOptions,
 ) -> Result<LabeledMesh, IoErrorKind> {
-    parse_ply(bytes)?.into_mesh(options)
+    parse_ply(bytes)?.into_mesh(options).map(|(mesh, _)| mesh)
 }
 
 /// What a property means to us.

@@ -99,6 +99,7 @@ element empty 1000000000\nend_header\n";
         &b.0,
         &ReadOptions {
             unlabeled: Unlabeled::Error,
+            ..ReadOptions::default()
         },
     )
     .unwrap();

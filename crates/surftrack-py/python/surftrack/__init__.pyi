@@ -42,8 +42,9 @@ class Mesh:
 
     def __init__(self, vertices: _Array, triangles: _Array, labels: _Array) -> None: ...
     @staticmethod
-    def read(path: _Path) -> "Mesh":
-        """Reads PLY or OBJ; raises OSError."""
+    def read(path: _Path, stitch: bool = False) -> "Mesh":
+        """Reads PLY or OBJ; stitch=True merges vertices repeated at one position on open
+        edges (STL-style per-face vertices) first; raises OSError."""
     def write(self, path: _Path) -> None:
         """Writes PLY or OBJ by extension; raises OSError."""
     @property
