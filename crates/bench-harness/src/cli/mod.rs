@@ -181,7 +181,9 @@ pub struct SceneArgs {
     /// Spheres (`spheres`), cells (`foam`) or copies (`copies`).
     #[arg(long = "count", short = 'n', visible_alias = "spheres")]
     pub count: Option<usize>,
-    /// Resolution; its meaning depends on the scene (`surftrack scenes --long`).
+    /// Resolution; its meaning depends on the scene (`surftrack scenes --long`). With
+    /// `--mesh` (`copies`, `run --flow`): split the mesh in four this many times (0: as
+    /// given) instead of until its thinnest material is resolved.
     #[arg(long)]
     pub resolution: Option<u32>,
     /// Radius (`double-bubble`, `inversion`, `cyclic`).

@@ -470,19 +470,34 @@ const MAX_COPIES_TRIANGLES: usize = 4_000_000;
 /// from nodes that miss it, and all of them vanished in the first step. `generate copies`
 /// keeps the mesh as given: `fix` chooses its own ℓ.
 fn tracked_copies_base(o: &SceneOptions, k: usize) -> Result<LabeledMesh, GeneratorError> {
-    let mut base = copies_base(o)?;
+    let base = copies_base(o)?;
     if o.mesh.is_none() || o.resolution.is_some() {
         return Ok(base);
     }
     let wanted = default_cell_size(&base).cell_size;
-    for _ in 0..MAX_COPIES_SPLITS {
-        let fine_enough = mean_edge_length(&base) <= wanted * (1.0 + 1e-9);
-        if fine_enough || 4 * base.num_triangles() * k.max(1) > MAX_COPIES_TRIANGLES {
+    Ok(split_until(base, wanted, k, MAX_COPIES_SPLITS, MAX_COPIES_TRIANGLES)?.0)
+}
+
+/// `mesh` split in four ([`generators::subdivide`]) until its mean edge is at most
+/// `edge`, at most `max_splits` times and while `copies` copies of it stay within
+/// `max_triangles`; also the mean edge reached.
+pub(crate) fn split_until(
+    mut mesh: LabeledMesh,
+    edge: f64,
+    copies: usize,
+    max_splits: u32,
+    max_triangles: usize,
+) -> Result<(LabeledMesh, f64), GeneratorError> {
+    let mut mean = mean_edge_length(&mesh);
+    for _ in 0..max_splits {
+        let fine_enough = mean <= edge * (1.0 + 1e-9);
+        if fine_enough || 4 * mesh.num_triangles() * copies.max(1) > max_triangles {
             break;
         }
-        base = generators::subdivide(&base, 1)?;
+        mesh = generators::subdivide(&mesh, 1)?;
+        mean = mean_edge_length(&mesh);
     }
-    Ok(base)
+    Ok((mesh, mean))
 }
 
 /// The remeshing benchmark's scene (`benches/remesh.rs`, `examples/remesh.rs`):
