@@ -88,24 +88,13 @@ pub(crate) fn stitch_open_vertices(positions: &mut Vec<DVec3>, tris: &mut [[u32;
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::generators::cuboid;
+    use crate::ids::Label;
 
     /// The 12 triangles of the unit cube, outward, over its 8 corners.
     fn cube() -> (Vec<DVec3>, Vec<[u32; 3]>) {
-        let positions = (0..8)
-            .map(|i| DVec3::new((i & 1) as f64, ((i >> 1) & 1) as f64, (i >> 2) as f64))
-            .collect();
-        let quads = [
-            [0, 2, 3, 1],
-            [4, 5, 7, 6],
-            [0, 1, 5, 4],
-            [2, 6, 7, 3],
-            [0, 4, 6, 2],
-            [1, 3, 7, 5],
-        ];
-        let tris = quads
-            .iter()
-            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
-            .collect();
+        let labels = [Label::OUTSIDE, Label::new(1)];
+        let (positions, tris, _) = cuboid(DVec3::ZERO, DVec3::ONE, labels).unwrap().to_raw();
         (positions, tris)
     }
 
