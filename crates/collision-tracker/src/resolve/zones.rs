@@ -329,6 +329,7 @@ fn null_space_projection(rows: &[Row], y: Vec<DVec3>) -> Vec<DVec3> {
     let stop = (1e-24 * gamma).max(m as f64 * rounding * rounding);
     let mut p = s.clone();
     let mut q = vec![DVec3::ZERO; r.len()];
+    let mut candidate = vec![DVec3::ZERO; r.len()];
     for _ in 0..2 * m + 20 {
         if gamma <= stop || gamma.is_nan() {
             break;
@@ -339,19 +340,19 @@ fn null_space_projection(rows: &[Row], y: Vec<DVec3>) -> Vec<DVec3> {
             break;
         }
         let alpha = gamma / qq;
-        let next_length: f64 = r
-            .iter()
-            .zip(&q)
-            .map(|(r, q)| (*r - *q * alpha).length_squared())
-            .sum();
+        // The step is taken into `candidate` and its length summed in the same pass; it
+        // replaces `r` only if it is not longer.
+        let mut next_length = 0.0;
+        for ((c, r), q) in candidate.iter_mut().zip(&r).zip(&q) {
+            *c = *r - *q * alpha;
+            next_length += c.length_squared();
+        }
         let diverging = next_length.is_nan() || next_length > length * (1.0 + 1e-6);
         if diverging {
             break; // keep the shorter iterate
         }
         length = next_length;
-        for (r, q) in r.iter_mut().zip(&q) {
-            *r -= *q * alpha;
-        }
+        std::mem::swap(&mut r, &mut candidate);
         apply(&r, &mut s);
         let next = dot(&s, &s);
         let beta = next / gamma;
