@@ -26,7 +26,7 @@
 //! Exactness: every decision about where the mesh meets the grid is made by exact
 //! predicates under one Simulation of Simplicity perturbation (grid points stand for
 //! `p + (ε, ε², ε³)`), shared by the crossing tests, the crossing order
-//! ([`stages::materials::order`]) and the face piercing test
+//! ([`mesh_core::predicates::compare_crossings`]) and the face piercing test
 //! ([`stages::flaws::segment_pierces_face`]), so the three agree with each other.
 //!
 //! The whole step ([`GridTracker`], behind [`mesh_core::SurfaceTracker`]; one-shot repair

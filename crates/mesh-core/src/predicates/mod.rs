@@ -31,13 +31,15 @@
 //!
 //! - [`orient2d`], [`orient3d`], [`orient2d_axis`], with [`Sign`] and [`Axis`];
 //! - [`cross_axis_line_triangle`], [`cross_axis_segment_triangle`],
-//!   [`compare_crossing_with_point`] for material-vector ray casting;
+//!   [`compare_crossing_with_point`], [`compare_crossings`] for material-vector ray
+//!   casting;
 //! - [`intersect_triangle_triangle`], [`intersect_segment_triangle`], and for mesh
 //!   validation [`intersect_sharing_vertex`] and [`intersect_sharing_edge`], both behind
 //!   [`intersect_keyed_triangle_triangle`] (two triangles of one mesh, shared vertices
 //!   recognised by key).
 
 pub mod crossing;
+pub mod order;
 pub mod orient;
 mod planar;
 pub mod tri_tri;
@@ -49,6 +51,7 @@ pub use crossing::{
     AxisCrossing, compare_crossing_with_point, cross_axis_line_triangle,
     cross_axis_segment_triangle, orient2d_sos,
 };
+pub use order::compare_crossings;
 pub use orient::{Axis, Sign, collinear, orient2d, orient2d_axis, orient3d};
 pub use tri_tri::{
     intersect_keyed_triangle_triangle, intersect_segment_triangle, intersect_sharing_edge,

@@ -17,7 +17,7 @@
 //!
 //! Filing: counting sort by edge id `3·node + axis` into CSR arrays, then each edge's
 //! crossings sorted in their exact order along the (perturbed) line
-//! ([`super::order::compare_crossings`]; coplanar ties by triangle id), so the result
+//! ([`mesh_core::predicates::compare_crossings`]; coplanar ties by triangle id), so the result
 //! is exact and does not depend on thread timing.
 
 use glam::{DVec2, DVec3, IVec3};
@@ -26,7 +26,7 @@ use mesh_core::{LabeledMesh, TriId};
 use rayon::prelude::*;
 
 use super::MaterialError;
-use super::order::compare_crossings;
+use mesh_core::predicates::compare_crossings;
 use crate::stages::grid::{Grid, Lattice};
 
 /// One crossing of a grid edge by a triangle.

@@ -37,7 +37,6 @@
 //! Entry point: [`assign_materials`].
 
 pub mod crossings;
-pub mod order;
 mod sweep;
 pub mod vector;
 

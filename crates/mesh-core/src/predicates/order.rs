@@ -1,5 +1,5 @@
 //! Exact order of two crossings along one axis-aligned grid line, under the same
-//! Simulation of Simplicity as [`mesh_core::predicates::crossing`].
+//! Simulation of Simplicity as [`super::crossing`].
 //!
 //! The line along axis `a` through `p* = p + (ε, ε², ε³)` meets the plane of triangle
 //! `i` (normal `n_i`, vertex `a_i`) at `t_i = −N_i / n_ia`, with
@@ -24,7 +24,7 @@ use std::cmp::Ordering;
 use std::ops::{Add, Mul, Sub};
 
 use glam::DVec3;
-use mesh_core::predicates::Axis;
+use super::Axis;
 use num_bigint::BigInt;
 
 /// The order along +`axis` of the crossings of triangles `t1` and `t2` with the grid
@@ -252,7 +252,7 @@ impl Exact {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use mesh_core::predicates::cross_axis_line_triangle;
+    use crate::predicates::cross_axis_line_triangle;
     use num_rational::BigRational;
     use proptest::prelude::*;
 
