@@ -15,17 +15,9 @@ pub fn sphere(sub: u32, centre: DVec3, radius: f64, outside: u32, inside: u32) -
     .expect("valid sphere parameters")
 }
 
-/// The disjoint union of several meshes (vertices and triangles concatenated).
+/// The disjoint union of several meshes ([`LabeledMesh::disjoint_union`]).
 pub fn union(meshes: &[LabeledMesh]) -> LabeledMesh {
-    let (mut pos, mut tris, mut labels) = (Vec::new(), Vec::new(), Vec::new());
-    for m in meshes {
-        let (p, t, l) = m.to_raw();
-        let off = pos.len() as u32;
-        pos.extend(p);
-        tris.extend(t.iter().map(|t| t.map(|v| v + off)));
-        labels.extend(l);
-    }
-    LabeledMesh::from_raw(pos, &tris, &labels).expect("valid union")
+    LabeledMesh::disjoint_union(meshes).expect("valid union")
 }
 
 /// The same mesh with every triangle's orientation reversed but labels kept: an

@@ -630,6 +630,26 @@ impl LabeledMesh {
         }
     }
 
+    /// The meshes side by side as one (each densely renumbered, ids offset in order):
+    /// how separately made parts of an assembly are put together. Nothing is merged,
+    /// so parts that touch or overlap stay as they are (`fix` resolves them), and a part
+    /// nested in another keeps the outside label it was made with (see
+    /// [`crate::placement`]). Fails only past the id limits.
+    pub fn disjoint_union(parts: &[LabeledMesh]) -> Result<LabeledMesh, MeshError> {
+        let (mut positions, mut tris, mut labels) = (Vec::new(), Vec::new(), Vec::new());
+        for m in parts {
+            let (p, t, l) = m.to_raw();
+            let base = u32::try_from(positions.len()).map_err(|_| MeshError::TooLarge {
+                what: "vertices",
+                count: positions.len(),
+            })?;
+            positions.extend(p);
+            tris.extend(t.iter().map(|t| t.map(|v| v + base)));
+            labels.extend(l);
+        }
+        LabeledMesh::from_raw(positions, &tris, &labels)
+    }
+
     /// Plain arrays of the live mesh, densely renumbered: positions, triangles, labels.
     pub fn to_raw(&self) -> (Vec<DVec3>, Vec<[u32; 3]>, Vec<[u32; 2]>) {
         let mut map = vec![u32::MAX; self.positions.len()];

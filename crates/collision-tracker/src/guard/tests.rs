@@ -15,15 +15,7 @@ use super::{CollisionGuard, CollisionGuardOptions};
 
 /// The union of several meshes (vertex and triangle ids offset in order).
 pub(crate) fn union(parts: &[LabeledMesh]) -> LabeledMesh {
-    let (mut p, mut t, mut l) = (Vec::new(), Vec::new(), Vec::new());
-    for m in parts {
-        let (pp, tt, ll) = m.to_raw();
-        let base = p.len() as u32;
-        p.extend(pp);
-        t.extend(tt.iter().map(|x| x.map(|v| v + base)));
-        l.extend(ll);
-    }
-    LabeledMesh::from_raw(p, &t, &l).expect("union of valid meshes")
+    LabeledMesh::disjoint_union(parts).expect("union of valid meshes")
 }
 
 fn sphere(sub: u32, c: DVec3, r: f64, labels: [u32; 2]) -> LabeledMesh {
