@@ -24,8 +24,9 @@ use std::cmp::Ordering;
 use std::ops::{Add, Mul, Sub};
 
 use glam::DVec3;
-use super::Axis;
 use num_bigint::BigInt;
+
+use super::Axis;
 
 /// The order along +`axis` of the crossings of triangles `t1` and `t2` with the grid
 /// line through `p` (its `axis` coordinate is irrelevant). Both triangles must cross the

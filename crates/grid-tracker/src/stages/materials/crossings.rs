@@ -21,12 +21,13 @@
 //! is exact and does not depend on thread timing.
 
 use glam::{DVec2, DVec3, IVec3};
-use mesh_core::predicates::{Axis, Sign, compare_crossing_with_point, cross_axis_line_triangle};
+use mesh_core::predicates::{
+    Axis, Sign, compare_crossing_with_point, compare_crossings, cross_axis_line_triangle,
+};
 use mesh_core::{LabeledMesh, TriId};
 use rayon::prelude::*;
 
 use super::MaterialError;
-use mesh_core::predicates::compare_crossings;
 use crate::stages::grid::{Grid, Lattice};
 
 /// One crossing of a grid edge by a triangle.
