@@ -183,6 +183,7 @@ pub fn run_scene_with(
     let validate_options = ValidateOptions {
         intersections: config.check_intersections,
         max_listed: 5,
+        ..ValidateOptions::default()
     };
     let initial_report = validate(&scene.mesh, &validate_options);
     let mut record = RunRecord {

@@ -443,8 +443,11 @@ fn replace_region(
     })
 }
 
-/// The safety net's own check (§9.2): layers 1–3 of validation; any defect becomes an
-/// inconsistency at the cells of its triangles.
+/// The safety net's own check (§9.2): layers 1–4 of validation; any defect becomes an
+/// inconsistency at the cells of its triangles. Placement (layer 4) included: a closed
+/// component smaller than a cell crosses no grid edge, so the grid keeps it as it is
+/// (§6.3, small features persist) whatever its labels, and motion can carry it out of
+/// the material its outside names; its cells rebuilt from the grid's labels drop it.
 fn check_mesh(
     mesh: &LabeledMesh,
     lattice: &Lattice,
@@ -453,6 +456,7 @@ fn check_mesh(
     let options = ValidateOptions {
         intersections: false,
         max_listed: SAFETY_LISTED,
+        ..ValidateOptions::default()
     };
     let report = timings.time("safety", || validate(mesh, &options));
     if report.is_valid() {

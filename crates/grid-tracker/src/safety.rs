@@ -62,7 +62,8 @@ fn triangle_cells(mesh: &LabeledMesh, lattice: &Lattice, t: TriId, out: &mut Vec
     box_cells(lattice, b.min, b.max, out);
 }
 
-/// Cells around every defect of `report` (layers 1–3), on `lattice`. Defects that name
+/// Cells around every defect of `report` (layers 1–4; for a misplaced component, every
+/// triangle of it), on `lattice`. Defects that name
 /// no live triangle with finite coordinates contribute nothing: the caller treats an
 /// invalid report with no cells as a failure it cannot repair.
 pub(crate) fn inconsistency_cells(
@@ -80,6 +81,10 @@ pub(crate) fn inconsistency_cells(
         tris.extend(e.tris.iter().copied());
     }
     tris.extend(report.zero_area.items.iter().copied());
+    if let Some(misplaced) = report.misplaced_shells.as_ref().filter(|m| !m.is_empty()) {
+        let named: Vec<TriId> = misplaced.items.iter().map(|m| m.tri).collect();
+        tris.extend(mesh_core::placement::component_triangles(mesh, &named));
+    }
     for e in &report.corner_table.items {
         let corner = match *e {
             CornerTableError::OppositeDead { corner, .. }

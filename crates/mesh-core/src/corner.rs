@@ -19,7 +19,7 @@
 use crate::ids::{CornerId, TriId};
 
 /// Which side of a triangle a corner lies on.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
 pub enum Side {
     /// Faces the material the right-hand normal points into (`labels[t][0]`).
     Front = 0,

@@ -24,6 +24,7 @@ pub mod geometry;
 pub mod ids;
 pub mod io;
 pub mod mesh;
+pub mod placement;
 pub mod predicates;
 pub mod regions;
 pub mod remesh;

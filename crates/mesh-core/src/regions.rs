@@ -47,6 +47,34 @@ impl Regions {
         (s != u32::MAX).then_some(s as usize)
     }
 
+    /// The surface component of every shell, named by its lowest shell index: both sides
+    /// of a triangle lie on one component, so its two shells are joined (union–find over
+    /// the triangles, linear time).
+    pub fn components(&self, mesh: &LabeledMesh) -> Vec<u32> {
+        let mut parent: Vec<u32> = (0..self.shells.len() as u32).collect();
+        fn find(parent: &mut [u32], mut i: u32) -> u32 {
+            while parent[i as usize] != i {
+                let up = parent[parent[i as usize] as usize];
+                parent[i as usize] = up;
+                i = up;
+            }
+            i
+        }
+        for t in mesh.triangles() {
+            if let (Some(a), Some(b)) =
+                (self.shell_of(t, Side::Front), self.shell_of(t, Side::Back))
+            {
+                let (ra, rb) = (find(&mut parent, a as u32), find(&mut parent, b as u32));
+                if ra != rb {
+                    parent[ra.max(rb) as usize] = ra.min(rb);
+                }
+            }
+        }
+        (0..parent.len() as u32)
+            .map(|i| find(&mut parent, i))
+            .collect()
+    }
+
     /// Shells that enclose a bounded volume (positive enclosed volume), with their labels.
     pub fn bounded(&self) -> impl Iterator<Item = &RegionShell> + '_ {
         self.shells.iter().filter(|s| s.volume > 0.0)
@@ -142,38 +170,20 @@ impl RegionCensus {
         for s in regions.shells.iter().filter(|s| significant(s)) {
             *shells.entry(s.label).or_insert(0) += 1;
         }
-        // Both sides of a triangle lie on one surface component: union their shells.
-        let mut parent: Vec<u32> = (0..regions.shells.len() as u32).collect();
-        fn find(parent: &mut [u32], mut i: u32) -> u32 {
-            while parent[i as usize] != i {
-                let up = parent[parent[i as usize] as usize];
-                parent[i as usize] = up;
-                i = up;
-            }
-            i
-        }
-        for t in mesh.triangles() {
-            if let (Some(a), Some(b)) = (
-                regions.shell_of(t, Side::Front),
-                regions.shell_of(t, Side::Back),
-            ) {
-                let (ra, rb) = (find(&mut parent, a as u32), find(&mut parent, b as u32));
-                if ra != rb {
-                    parent[ra.max(rb) as usize] = ra.min(rb);
-                }
-            }
-        }
+        let component = regions.components(mesh);
         let components = if min_thickness > 0.0 {
-            let mut counted = vec![false; parent.len()];
+            let mut counted = vec![false; component.len()];
             for (i, shell) in regions.shells.iter().enumerate() {
                 if significant(shell) {
-                    counted[find(&mut parent, i as u32) as usize] = true;
+                    counted[component[i] as usize] = true;
                 }
             }
             counted.iter().filter(|&&c| c).count()
         } else {
-            (0..parent.len() as u32)
-                .filter(|&i| find(&mut parent, i) == i)
+            component
+                .iter()
+                .enumerate()
+                .filter(|&(i, &c)| c as usize == i)
                 .count()
         };
         Self { components, shells }

@@ -153,7 +153,9 @@ impl PyMesh {
 
     /// validate(intersections=True) -> ValidationReport: topology (closed, no degenerate
     /// or duplicate triangles), labels (front != back, consistent around every edge),
-    /// geometry (finite, no zero-area triangle) and, if asked, exact self-intersections.
+    /// geometry (finite, no zero-area triangle), placement (every surface component has
+    /// outside it the material it lies in: "misplaced_shells") and, if asked, exact
+    /// self-intersections.
     #[pyo3(signature = (intersections = true))]
     fn validate(&self, py: Python<'_>, intersections: bool) -> PyResult<PyValidationReport> {
         let mesh = self.mesh.clone();

@@ -24,6 +24,8 @@ use crate::ids::{CornerId, Label, TriId, VertexId};
 use crate::mesh::LabeledMesh;
 use crate::predicates::collinear;
 
+#[cfg(test)]
+use super::edit::EditError;
 use super::edit::{Edit, VertexRef};
 
 /// What an edit's end state would break, and where. Vertex keys are the ids the vertices
@@ -57,7 +59,26 @@ pub enum StructureFault {
         /// The two labels facing the wedge.
         labels: [Label; 2],
     },
+    /// A closed surface component of at most [`SMALL_COMPONENT`] triangles would be turned
+    /// inside out: the volume one of its materials encloses changes sign.
+    Inverts {
+        /// A triangle of the component (an id it has before the edit).
+        tri: u32,
+        /// The material whose volume changes sign.
+        label: Label,
+    },
 }
+
+/// Components up to this many triangles are checked for inversion by every edit
+/// ([`StructureFault::Inverts`]).
+///
+/// Why: a component a few triangles large (a droplet or bubble smaller than a grid cell,
+/// left by a topology change) can be nearly flat, and one collapse that moves its apex
+/// through its base by a few degrees of normal change — inside every per-triangle bound —
+/// turns it inside out: its labels then say the material outside it is the one it
+/// enclosed, and placement (layer 4 of [`crate::validate`]) fails. A component larger
+/// than this encloses more than any local edit changes, so it cannot flip.
+pub const SMALL_COMPONENT: usize = 64;
 
 impl std::fmt::Display for StructureFault {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -70,6 +91,10 @@ impl std::fmt::Display for StructureFault {
                 f,
                 "around edge {edge:?} a wedge would be labelled {} and {}",
                 labels[0], labels[1]
+            ),
+            Self::Inverts { tri, label } => write!(
+                f,
+                "the small component of t{tri} would be turned inside out (the volume of {label} changes sign)"
             ),
         }
     }
@@ -98,6 +123,13 @@ pub(crate) struct StructureScratch {
     local_tris: Vec<[VertexId; 3]>,
     local_positions: Vec<DVec3>,
     group: Vec<EdgeIncidence>,
+    /// Triangles of the component being flooded ([`small_component`]), in BFS order.
+    component: Vec<TriId>,
+    /// Per triangle slot, the check that last flooded it ([`Self::epoch`]).
+    flooded: Vec<u32>,
+    /// The current check's stamp in `flooded`.
+    epoch: u32,
+    seeds: Vec<TriId>,
 }
 
 impl StructureScratch {
@@ -228,6 +260,145 @@ pub(crate) fn check_structure(
             },
         );
     s.edges = edges;
+    result?;
+    check_small_components(mesh, edit, s)
+}
+
+/// Floods the surface component of `seed` over edge neighbours, breadth first, into
+/// `out`; true when it has at most [`SMALL_COMPONENT`] triangles (then `out` holds all of
+/// them), false as soon as it has more.
+fn small_component(mesh: &LabeledMesh, seed: TriId, out: &mut Vec<TriId>) -> bool {
+    out.clear();
+    out.push(seed);
+    let mut next = 0;
+    while next < out.len() {
+        let t = out[next];
+        next += 1;
+        for side in [Side::Front, Side::Back] {
+            for k in 0..3 {
+                let Some(o) = mesh.opposite(CornerId::of(t, side, k)) else {
+                    continue;
+                };
+                let u = o.tri();
+                if !out.contains(&u) {
+                    if out.len() == SMALL_COMPONENT {
+                        return false;
+                    }
+                    out.push(u);
+                }
+            }
+        }
+    }
+    true
+}
+
+/// Signed volume each label encloses, restricted to the triangles `tris` (positions from
+/// `at`), relative to `origin` so that a tiny component far from the origin keeps its
+/// digits: `+` cone for the label behind a triangle, `−` for the one in front.
+fn add_label_volumes(
+    volumes: &mut Vec<(Label, f64, f64)>,
+    after: bool,
+    origin: DVec3,
+    tris: impl Iterator<Item = ([DVec3; 3], [Label; 2])>,
+) {
+    for (p, [front, back]) in tris {
+        let [a, b, c] = p.map(|q| q - origin);
+        let cone = a.dot(b.cross(c)) / 6.0;
+        for (label, v) in [(back, cone), (front, -cone)] {
+            let slot = match volumes.iter().position(|e| e.0 == label) {
+                Some(i) => i,
+                None => {
+                    volumes.push((label, 0.0, 0.0));
+                    volumes.len() - 1
+                }
+            };
+            if after {
+                volumes[slot].2 += v;
+            } else {
+                volumes[slot].1 += v;
+            }
+        }
+    }
+}
+
+/// [`StructureFault::Inverts`]: every small component the edit touches keeps the sign of
+/// every label's enclosed volume (see [`SMALL_COMPONENT`]).
+fn check_small_components(
+    mesh: &LabeledMesh,
+    edit: &Edit,
+    s: &mut StructureScratch,
+) -> Result<(), StructureFault> {
+    let mut component = std::mem::take(&mut s.component);
+    let mut seeds = std::mem::take(&mut s.seeds);
+    seeds.clear();
+    seeds.extend_from_slice(&edit.remove_tris);
+    seeds.extend(
+        edit.moves
+            .iter()
+            .flat_map(|m| mesh.vertex_triangles(m.vertex)),
+    );
+    if s.flooded.len() < mesh.triangle_capacity() {
+        s.flooded.resize(mesh.triangle_capacity(), 0);
+    }
+    s.epoch = s.epoch.wrapping_add(1);
+    if s.epoch == 0 {
+        s.flooded.fill(0);
+        s.epoch = 1;
+    }
+    let mut result = Ok(());
+    for &seed in &seeds {
+        if s.flooded[seed.idx()] == s.epoch {
+            continue;
+        }
+        let small = small_component(mesh, seed, &mut component);
+        for t in &component {
+            s.flooded[t.idx()] = s.epoch;
+        }
+        if !small {
+            continue;
+        }
+        let origin = mesh.position(mesh.tri(component[0])[0]);
+        let mut volumes: Vec<(Label, f64, f64)> = Vec::new();
+        add_label_volumes(
+            &mut volumes,
+            false,
+            origin,
+            component
+                .iter()
+                .map(|&t| (mesh.tri_positions(t), mesh.labels(t))),
+        );
+        let kept = component
+            .iter()
+            .filter(|&&t| s.removed.binary_search(&t).is_err())
+            .map(|&t| {
+                let p = mesh.tri(t).map(|v| s.end(mesh, edit, VertexRef::Old(v)));
+                (p, mesh.labels(t))
+            });
+        // New triangles join the component of the old vertices they use.
+        let in_component = |v: VertexId| mesh.vertex_triangles(v).any(|t| component.contains(&t));
+        let added = edit
+            .add_tris
+            .iter()
+            .filter(|(verts, _)| {
+                verts
+                    .iter()
+                    .any(|r| matches!(r, VertexRef::Old(v) if in_component(*v)))
+            })
+            .map(|(verts, labels)| (verts.map(|r| s.end(mesh, edit, r)), *labels));
+        add_label_volumes(&mut volumes, true, origin, kept.chain(added));
+        if let Some(&(label, _, _)) = volumes
+            .iter()
+            .find(|(_, before, after)| before * after < 0.0)
+        {
+            result = Err(StructureFault::Inverts {
+                tri: component[0].raw(),
+                label,
+            });
+            break;
+        }
+    }
+    s.component = component;
+    s.seeds = seeds;
     result
 }
 
@@ -353,6 +524,11 @@ pub(crate) fn blame_moves(mesh: &LabeledMesh, edit: &Edit, fault: &StructureFaul
                     tri.contains(&edge[0]) && tri.contains(&edge[1])
                 })
             }
+            StructureFault::Inverts { tri, .. } => {
+                let mut component = Vec::new();
+                small_component(mesh, TriId::new(tri), &mut component);
+                mesh.vertex_triangles(v).any(|t| component.contains(&t))
+            }
         }
     };
     (0..edit.moves.len())
@@ -391,5 +567,109 @@ mod tests {
             })
             .collect();
         assert_eq!(got, tris);
+    }
+
+    /// A flat droplet of material 1 (5 vertices, 6 triangles, 0.006 thick), left in a grid
+    /// run by the implicit-surface follower (three blobs separating, t = 0.8; the
+    /// coordinates are that run's). Collapsing the edge between its two highest and lowest
+    /// vertices to the midpoint turns each triangle by a few degrees only, but leaves a
+    /// tetrahedron whose labels say material 1 outside and 0 inside, in the middle of
+    /// material 0 — which placement (layer 4) then reports. The structure check must
+    /// refuse it; a collapse on a small component that keeps its orientation is allowed.
+    #[test]
+    fn collapse_that_turns_a_small_component_inside_out_is_refused() {
+        use crate::remesh::edit::{Edit, VertexMove};
+        use crate::remesh::{NoGuard, VertexAttributes, apply_edit};
+        let p = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+        let positions = vec![
+            p(
+                0.11517430157303077,
+                0.35351834256427944,
+                0.004975778501091408,
+            ),
+            p(
+                0.1189201157330418,
+                0.33141702713404825,
+                0.005212248615293247,
+            ),
+            p(
+                0.12688895810738304,
+                0.3356523780751495,
+                0.005127944840523488,
+            ),
+            p(0.126980238531119, 0.3549320587613059, 0.0026312770164543947),
+            p(0.126680238531119, 0.35508205876130594, 0.00885977040167954),
+        ];
+        // Local ids: 0 = 327, 1 = 620, 2 = 644, 3 = 669 (lower apex), 4 = 811 (upper).
+        let tris = [
+            [4, 3, 0],
+            [3, 1, 2],
+            [2, 4, 0],
+            [4, 2, 3],
+            [0, 1, 2],
+            [3, 0, 1],
+        ];
+        let labels = [[0, 1], [1, 0], [0, 1], [0, 1], [0, 1], [1, 0]];
+        let build = |positions: Vec<DVec3>| {
+            LabeledMesh::from_raw(positions, &tris, &labels).expect("droplet")
+        };
+        fn collapse_edge_to_midpoint(m: &LabeledMesh, a: VertexId, b: VertexId) -> Edit {
+            let mid = (m.position(a) + m.position(b)) / 2.0;
+            let mut edit = Edit::default();
+            for t in m.vertex_triangles(b) {
+                edit.remove_tris.push(t);
+                let tri = m.tri(t);
+                if !tri.contains(&a) {
+                    let verts = tri.map(|v| VertexRef::Old(if v == b { a } else { v }));
+                    edit.add_tris.push((verts, m.labels(t)));
+                }
+            }
+            for v in [a, b] {
+                edit.moves.push(VertexMove {
+                    vertex: v,
+                    end: mid,
+                    blend: None,
+                });
+            }
+            edit.remove_vertices.push(b);
+            edit
+        }
+        let placed =
+            |m: &LabeledMesh| crate::placement::misplaced_shells(m, &m.regions()).is_empty();
+
+        let mut m = build(positions.clone());
+        assert!(crate::validate::validate(&m, &Default::default()).is_valid());
+        let edit = collapse_edge_to_midpoint(&m, VertexId::new(3), VertexId::new(4));
+        let err = apply_edit(&mut m, &mut VertexAttributes::none(), &mut NoGuard, &edit)
+            .expect_err("the collapse inverts the droplet");
+        assert!(
+            matches!(err, EditError::Structure(StructureFault::Inverts { label, .. }) if label == Label::new(1) || label == Label::new(0)),
+            "{err}"
+        );
+        assert!(placed(&m), "a refused edit leaves the mesh as it was");
+
+        // What the check stands between: the same edit committed without it misplaces
+        // the droplet.
+        let mut unchecked = build(positions.clone());
+        crate::remesh::edit::commit_guarded(
+            &mut unchecked,
+            &mut VertexAttributes::none(),
+            &mut NoGuard,
+            &edit,
+        )
+        .expect("commits");
+        assert!(!placed(&unchecked), "the inverted tetrahedron is misplaced");
+
+        // A collapse on a small component that keeps its orientation is allowed: an
+        // edge of an icosahedron (20 triangles) to its midpoint.
+        let mut m =
+            crate::generators::icosphere(0, DVec3::ZERO, 1.0, [Label::new(0), Label::new(1)])
+                .expect("icosahedron");
+        let [a, b, _] = m.tri(TriId::new(0));
+        let edit = collapse_edge_to_midpoint(&m, a, b);
+        apply_edit(&mut m, &mut VertexAttributes::none(), &mut NoGuard, &edit)
+            .expect("a collapse that keeps the component's orientation is allowed");
+        assert_eq!(m.num_triangles(), 18);
+        assert!(placed(&m));
     }
 }

@@ -11,7 +11,11 @@
 //! 2. [`check_labels`] — `front != back`, and one label per wedge around every edge
 //!    (radial order, so non-manifold junctions are checked too);
 //! 3. [`check_geometry`] — finite coordinates, no exactly zero-area triangle;
-//! 4. [`check_intersections`] — exact self-intersection test with a parallel broad phase
+//! 4. placement — every surface component carries on its outside the material it lies
+//!    in, by one exact ray per component ([`crate::placement`]; [`validate`] runs it when
+//!    [`ValidateOptions::placement`] and layers 1–3 passed: it needs a closed,
+//!    consistently labelled mesh);
+//! 5. [`check_intersections`] — exact self-intersection test with a parallel broad phase
 //!    (the expensive one; [`validate`] runs it when [`ValidateOptions::intersections`]).
 //!
 //! [`debug_validate!`](crate::debug_validate) runs layers 1–3 at pipeline stage
@@ -48,6 +52,11 @@ pub struct ValidateOptions {
     /// three times as much as layers 1–3 together (on a 1.3M-triangle sphere, ~1.0 vs
     /// ~0.3 CPU-seconds).
     pub intersections: bool,
+    /// Run the placement check (layer 4) when layers 1–3 pass. On by default: it costs a
+    /// pass over the triangles plus one exact ray per surface component, and catches the
+    /// one labelling error the local layers cannot see (a part nested in another with the
+    /// wrong material outside it), after which a tracker loses a material.
+    pub placement: bool,
     /// Cap on the offenders *listed* per category; the counts stay exact.
     pub max_listed: usize,
 }
@@ -57,13 +66,14 @@ impl Default for ValidateOptions {
     fn default() -> Self {
         ValidateOptions {
             intersections: false,
+            placement: true,
             max_listed: 100,
         }
     }
 }
 
 impl ValidateOptions {
-    /// All four layers, listing up to 100 offenders per category.
+    /// All five layers, listing up to 100 offenders per category.
     pub fn with_intersections() -> Self {
         ValidateOptions {
             intersections: true,
@@ -72,13 +82,21 @@ impl ValidateOptions {
     }
 }
 
-/// Validates `mesh`: layers 1–3 always, layer 4 when `opts.intersections`.
+/// Validates `mesh`: layers 1–3 always, layer 4 when `opts.placement` and layers 1–3
+/// passed, layer 5 when `opts.intersections`.
 pub fn validate(mesh: &LabeledMesh, opts: &ValidateOptions) -> ValidationReport {
-    if opts.intersections {
-        check_intersections(mesh, opts)
-    } else {
-        check_geometry(mesh, opts)
+    let (mut report, ctx) = layers_to_geometry(mesh, opts);
+    if opts.placement && report.is_valid() {
+        let mut listed = Listed::default();
+        for m in crate::placement::misplaced_shells(mesh, &mesh.regions()) {
+            listed.push(m, opts.max_listed);
+        }
+        report.misplaced_shells = Some(listed);
     }
+    if opts.intersections {
+        report.self_intersecting_pairs = Some(intersections::check(mesh, &ctx, opts.max_listed));
+    }
+    report
 }
 
 /// Layer 1 only: ids, references, duplicates, boundary, corner table and rings.
@@ -96,7 +114,7 @@ pub fn check_geometry(mesh: &LabeledMesh, opts: &ValidateOptions) -> ValidationR
     layers_to_geometry(mesh, opts).0
 }
 
-/// Layers 1–4: adds the exact self-intersection check.
+/// Layers 1–3 and 5: adds the exact self-intersection check (not placement).
 pub fn check_intersections(mesh: &LabeledMesh, opts: &ValidateOptions) -> ValidationReport {
     let (mut report, ctx) = layers_to_geometry(mesh, opts);
     report.self_intersecting_pairs = Some(intersections::check(mesh, &ctx, opts.max_listed));

@@ -6,6 +6,7 @@ use std::fmt;
 use serde::Serialize;
 
 use crate::ids::{CornerId, Label, TriId, VertexId};
+use crate::placement::MisplacedShell;
 
 /// Offenders of one category: the exact `count`, and the first `items` (up to
 /// [`super::ValidateOptions::max_listed`], in increasing id order).
@@ -178,14 +179,19 @@ pub struct ValidationReport {
     pub non_finite: Listed<VertexId>,
     /// Layer 3: triangles with three distinct vertices at exactly collinear positions.
     pub zero_area: Listed<TriId>,
-    /// Layer 4: pairs of triangles that intersect other than along what they share,
+    /// Layer 4: surface components whose outside is labelled with another material than
+    /// the one they lie in (a part drawn inside another, both labelled against 0), by
+    /// [`crate::placement::misplaced_shells`]; `None` when not checked (layers 1–3 failed,
+    /// or [`super::ValidateOptions::placement`] is off).
+    pub misplaced_shells: Option<Listed<MisplacedShell>>,
+    /// Layer 5: pairs of triangles that intersect other than along what they share,
     /// `[lower id, higher id]`; `None` when not checked.
     pub self_intersecting_pairs: Option<Listed<[TriId; 2]>>,
 }
 
 impl ValidationReport {
-    /// True when no category has an offender. Self-intersections count only if they were
-    /// checked.
+    /// True when no category has an offender. Placement and self-intersections count only
+    /// if they were checked.
     pub fn is_valid(&self) -> bool {
         self.dangling_references.is_empty()
             && self.degenerate.is_empty()
@@ -196,6 +202,7 @@ impl ValidationReport {
             && self.inconsistent_edges.is_empty()
             && self.non_finite.is_empty()
             && self.zero_area.is_empty()
+            && self.misplaced_shells.as_ref().is_none_or(Listed::is_empty)
             && self
                 .self_intersecting_pairs
                 .as_ref()
@@ -279,6 +286,18 @@ impl fmt::Display for ValidationReport {
             v.to_string()
         })?;
         category(f, "zero-area triangles", &self.zero_area, |t| t.to_string())?;
+        if let Some(shells) = &self.misplaced_shells {
+            category(f, "misplaced shells", shells, |m| {
+                format!(
+                    "the surface component of {} ({} triangles) is labelled material {} \
+                     outside, but lies in {}",
+                    m.tri,
+                    m.component_triangles,
+                    m.claimed.raw(),
+                    m.found_text()
+                )
+            })?;
+        }
         if let Some(pairs) = &self.self_intersecting_pairs {
             category(f, "self-intersecting triangle pairs", pairs, |[a, b]| {
                 format!("{a} × {b}")

@@ -301,6 +301,7 @@ fn lists_are_capped_counts_exact_and_sorted() {
     let opts = ValidateOptions {
         intersections: false,
         max_listed: 5,
+        ..ValidateOptions::default()
     };
     let r = validate(&mesh, &opts);
     assert_eq!(r.same_label_triangles.count, n.div_ceil(3) as usize);
@@ -374,6 +375,7 @@ fn broad_phase_misses_no_intersecting_pair() {
     let opts = ValidateOptions {
         intersections: true,
         max_listed: usize::MAX,
+        ..ValidateOptions::default()
     };
     let got = validate(&mesh, &opts).self_intersecting_pairs.unwrap();
     let mut want = Vec::new();
