@@ -32,8 +32,11 @@
 use std::time::Instant;
 
 use glam::IVec3;
+use mesh_core::placement::{Relabelled, place_nested};
 use mesh_core::remesh::{ImproveReport, VertexAttributes};
-use mesh_core::validate::{Listed, ValidateOptions, ValidationReport, any_intersection, validate};
+use mesh_core::validate::{
+    Listed, ValidateOptions, ValidationReport, any_intersection, check_intersections, validate,
+};
 use mesh_core::{Label, LabelVolume, LabeledMesh, MaterialCensus, StageTiming, TriId};
 
 use crate::params::{GridParams, ImproveScope};
@@ -119,8 +122,13 @@ pub struct FixReport {
     pub cell_size: f64,
     /// How ℓ was chosen, and why.
     pub cell_size_choice: CellSizeChoice,
-    /// The input was clean (all four validation layers) and is returned unchanged.
+    /// The input was clean (every validation layer) and is returned unchanged.
     pub clean_input: bool,
+    /// Nested parts whose outside was relabelled with the material they lie in before
+    /// anything else ([`place_nested`]): what a part drawn inside another and labelled
+    /// against 0 means. When this is not empty, the other counts and ids of the report
+    /// refer to the relabelled input.
+    pub relabelled: Vec<Relabelled>,
     /// Live triangles of the input.
     pub triangles_in: usize,
     /// Live triangles of the output.
@@ -277,6 +285,54 @@ fn check_fix_input(mesh: &LabeledMesh) -> Result<ValidationReport, FixError> {
     Ok(r)
 }
 
+/// Relabels the nested parts of the input ([`place_nested`]) that layer 4 of validation
+/// found misplaced, except parts that intersect another surface component: their
+/// overlap is the repair's to resolve (a copy overlapping another also measures a wrong
+/// outside, but it is not nested). Returns the relabelled mesh (`None`: unchanged).
+fn place_input(
+    mesh: &LabeledMesh,
+    report: &ValidationReport,
+) -> Result<(Option<LabeledMesh>, Vec<Relabelled>), FixError> {
+    if report
+        .misplaced_shells
+        .as_ref()
+        .is_none_or(Listed::is_empty)
+    {
+        return Ok((None, Vec::new()));
+    }
+    let regions = mesh.regions();
+    let component = regions.components(mesh);
+    let component_of = |t: TriId| {
+        regions
+            .shell_of(t, mesh_core::Side::Front)
+            .map(|s| component[s])
+    };
+    let mut overlapping = vec![false; component.len()];
+    if any_intersection(mesh) {
+        let all = ValidateOptions {
+            max_listed: usize::MAX,
+            placement: false,
+            ..ValidateOptions::default()
+        };
+        let pairs = check_intersections(mesh, &all).self_intersecting_pairs;
+        for [a, b] in pairs.map(|p| p.items).unwrap_or_default() {
+            if let (Some(ca), Some(cb)) = (component_of(a), component_of(b))
+                && ca != cb
+            {
+                overlapping[ca as usize] = true;
+                overlapping[cb as usize] = true;
+            }
+        }
+    }
+    let may_relabel = |t: TriId| component_of(t).is_some_and(|c| !overlapping[c as usize]);
+    let (placed, relabelled) = place_nested(mesh, may_relabel)
+        .map_err(|e| FixError::InvalidInput(format!("relabelling nested parts failed: {e}")))?;
+    for r in &relabelled {
+        tracing::info!("fix: {r}");
+    }
+    Ok((placed, relabelled))
+}
+
 /// Refuses a consistently labelled input whose unbounded outside is not label 0: a
 /// material with a negative enclosed volume (every closed shell of a material facing
 /// outward counts positive) means its faces' sides are the other way round. Why here:
@@ -329,6 +385,15 @@ pub fn fix_with(mesh: &LabeledMesh, options: &FixOptions) -> Result<FixOutcome, 
     let deadline = params.time_budget.map(|b| started + b);
     let mut timings = Timings::default();
     let input_report = timings.time("validate", || check_fix_input(mesh))?;
+    let original_triangles = mesh.num_triangles();
+    let (placed, relabelled) = timings.time("placement", || place_input(mesh, &input_report))?;
+    let (mesh, input_report) = match &placed {
+        Some(placed) => (
+            placed,
+            timings.time("validate", || check_fix_input(placed))?,
+        ),
+        None => (mesh, input_report),
+    };
     let choice = match params.cell_size {
         Some(l) => CellSizeChoice::given(l),
         None => timings.time("scale", || default_cell_size(mesh)),
@@ -352,9 +417,16 @@ pub fn fix_with(mesh: &LabeledMesh, options: &FixOptions) -> Result<FixOutcome, 
         if !intersects {
             let mut full = input_report;
             full.self_intersecting_pairs = Some(Listed::default());
-            return Ok(clean_outcome(
-                started, mesh, options, choice, before, full, timings,
-            ));
+            let touched: usize = relabelled.iter().map(|r| r.relabelled_triangles).sum();
+            let mut outcome = clean_outcome(started, mesh, options, choice, before, full, timings);
+            if !relabelled.is_empty() {
+                let report = &mut outcome.report;
+                report.clean_input = false;
+                report.triangles_in = original_triangles;
+                report.untouched_fraction = 1.0 - touched as f64 / original_triangles.max(1) as f64;
+                report.relabelled = relabelled;
+            }
+            return Ok(outcome);
         }
     }
 
@@ -475,6 +547,7 @@ pub fn fix_with(mesh: &LabeledMesh, options: &FixOptions) -> Result<FixOutcome, 
         cell_size,
         cell_size_choice: choice,
         clean_input: false,
+        relabelled,
         triangles_in,
         triangles_out: out.num_triangles(),
         untouched_fraction: untouched as f64 / triangles_in.max(1) as f64,
@@ -560,6 +633,7 @@ fn clean_outcome(
         cell_size: choice.cell_size,
         cell_size_choice: choice,
         clean_input: true,
+        relabelled: Vec::new(),
         triangles_in: n,
         triangles_out: n,
         untouched_fraction: 1.0,

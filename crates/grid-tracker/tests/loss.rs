@@ -373,3 +373,81 @@ fn swapped_front_and_back_labels_are_named_in_the_error() {
     let out = fix_default(&right);
     assert!(out.report.vanished.is_empty());
 }
+
+/// The volume of each label of `m`.
+fn volume_of(m: &LabeledMesh, label: u32) -> f64 {
+    label_volumes(m)
+        .get(&Label::new(label))
+        .copied()
+        .unwrap_or(0.0)
+}
+
+/// A part drawn inside another and labelled against the outside 0, as separately
+/// exported parts of an assembly arrive: `validate` now says where, the grid tracker
+/// refuses it instead of resolving the inner part away as an overlap, and `fix` relabels
+/// its outside with the material around it, keeping both materials and every triangle.
+#[test]
+fn a_nested_part_keeps_its_material() {
+    let outer = sphere(2, DVec3::ZERO, 1.0, 0, 1);
+    let inner = sphere(2, DVec3::new(0.1, -0.05, 0.0), 0.4, 0, 2);
+    let (v_outer, v_inner) = (volume_of(&outer, 1), volume_of(&inner, 2));
+    let nested = union(&[outer, inner]);
+
+    let report = validate(&nested, &ValidateOptions::default());
+    assert_eq!(
+        report.misplaced_shells.as_ref().map(|m| m.count),
+        Some(1),
+        "{report}"
+    );
+    match GridTracker::new(nested.clone(), GridParams::default()) {
+        Err(e) => assert!(e.to_string().contains("misplaced"), "{e}"),
+        Ok(_) => panic!("the grid tracker took a misplaced part"),
+    }
+
+    let out = fix_default(&nested);
+    assert_eq!(out.report.relabelled.len(), 1);
+    let r = &out.report.relabelled[0];
+    assert_eq!((r.from, r.to), (Label::new(0), Label::new(1)));
+    assert!(!out.report.clean_input);
+    assert!(out.report.vanished.is_empty());
+    let check = validate(&out.mesh, &ValidateOptions::with_intersections());
+    assert!(check.is_valid(), "{check}");
+    assert_eq!(out.mesh.num_triangles(), nested.num_triangles());
+    assert!((volume_of(&out.mesh, 2) - v_inner).abs() < 1e-12);
+    assert!((volume_of(&out.mesh, 1) - (v_outer - v_inner)).abs() < 1e-12);
+}
+
+/// Next to an overlap (two crossing boxes, which the repair resolves into an interface),
+/// a nested part that touches nothing is still relabelled, and the overlapping boxes are
+/// not: each keeps its material.
+#[test]
+fn a_nested_part_beside_an_overlap_is_relabelled_and_the_overlap_repaired() {
+    let a = cube(DVec3::ZERO, DVec3::new(2.0, 1.0, 1.0), 0, 1);
+    let b = cube(
+        DVec3::new(1.5, 0.25, 0.25),
+        DVec3::new(2.5, 0.75, 0.75),
+        0,
+        2,
+    );
+    let part = sphere(1, DVec3::new(0.5, 0.5, 0.5), 0.2, 0, 3);
+    let v_part = volume_of(&part, 3);
+    let mesh = union(&[a, b, part]);
+    let out = fix_default(&mesh);
+    assert_eq!(
+        out.report.relabelled.len(),
+        1,
+        "{:?}",
+        out.report.relabelled
+    );
+    assert_eq!(out.report.relabelled[0].to, Label::new(1));
+    assert!(
+        out.report.flawed_cells > 0,
+        "the overlap went through the repair"
+    );
+    let check = validate(&out.mesh, &ValidateOptions::with_intersections());
+    assert!(check.is_valid(), "{check}");
+    for label in 1..=3 {
+        assert!(volume_of(&out.mesh, label) > 0.0, "material {label} kept");
+    }
+    assert!((volume_of(&out.mesh, 3) - v_part).abs() < 1e-3 * v_part);
+}

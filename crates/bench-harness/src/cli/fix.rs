@@ -65,6 +65,9 @@ pub(super) fn run(args: &FixArgs) -> anyhow::Result<ExitCode> {
     } else {
         let total = report.seconds;
         let c = &report.volume_check;
+        for r in &report.relabelled {
+            println!("nested part: {r}");
+        }
         println!("{}", report.cell_size_choice.reason);
         for v in &report.volumes {
             println!(
