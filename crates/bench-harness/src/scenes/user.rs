@@ -202,6 +202,20 @@ pub fn build(
     if mesh.num_triangles() == 0 {
         return Err(spec.error("the mesh has no triangles".into()));
     }
+    // Before any splitting (up to millions of triangles): the trackers refuse a part
+    // whose outside label is not the material it lies in, and `fix` is the remedy.
+    if let Some(m) = mesh_core::placement::misplaced_shells(&mesh, &mesh.regions()).first() {
+        return Err(spec.error(format!(
+            "the surface component of {} ({} triangles) is labelled material {} outside, \
+             but lies in {}: a part nested in another with the wrong label outside it, or \
+             overlapping it. `surftrack fix IN OUT` relabels nested parts and repairs \
+             overlaps; run on its output",
+            m.tri,
+            m.component_triangles,
+            m.claimed.raw(),
+            m.found_text()
+        )));
+    }
     let mesh = fit_mesh(mesh, o.resolution).map_err(|m| spec.error(m))?;
     let l = mean_edge_length(&mesh);
     let (flow, dt): (Box<dyn Flow>, f64) = match spec.name {
@@ -350,6 +364,25 @@ mod tests {
             ..o
         };
         assert!(build("rotation", &o, &FlowOptions::default()).is_ok());
+    }
+
+    /// A part nested in another with 0 outside it: an error that names it and `fix`,
+    /// before any splitting.
+    #[test]
+    fn a_nested_part_is_an_error_pointing_at_fix() {
+        let l = |i| mesh_core::Label::new(i);
+        let outer = mesh_core::generators::icosphere(1, DVec3::ZERO, 1.0, [l(0), l(1)]).unwrap();
+        let inner = mesh_core::generators::icosphere(1, DVec3::ZERO, 0.5, [l(0), l(2)]).unwrap();
+        let o = SceneOptions {
+            mesh: Some(LabeledMesh::disjoint_union(&[outer, inner]).unwrap()),
+            ..SceneOptions::default()
+        };
+        let message = build("normal", &o, &FlowOptions::default())
+            .err()
+            .expect("refused")
+            .to_string();
+        assert!(message.contains("lies in material 1"), "{message}");
+        assert!(message.contains("surftrack fix"), "{message}");
     }
 
     fn options() -> SceneOptions {
