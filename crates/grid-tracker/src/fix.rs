@@ -29,13 +29,15 @@
 //! creases outside the flawed cells are untouched (the input's own triangles), and a finer
 //! ℓ shrinks what is rebuilt.
 
+use std::cell::{OnceCell, RefCell};
 use std::time::Instant;
 
 use glam::IVec3;
+use mesh_core::broadphase::{Aabb, Bvh};
 use mesh_core::placement::{Relabelled, place_nested};
 use mesh_core::remesh::{ImproveReport, VertexAttributes};
 use mesh_core::validate::{
-    Listed, ValidateOptions, ValidationReport, any_intersection, check_intersections, validate,
+    Listed, ValidateOptions, ValidationReport, any_intersection, triangles_intersect, validate,
 };
 use mesh_core::{Label, LabelVolume, LabeledMesh, MaterialCensus, StageTiming, TriId};
 
@@ -289,6 +291,10 @@ fn check_fix_input(mesh: &LabeledMesh) -> Result<ValidationReport, FixError> {
 /// found misplaced, except parts that intersect another surface component: their
 /// overlap is the repair's to resolve (a copy overlapping another also measures a wrong
 /// outside, but it is not nested). Returns the relabelled mesh (`None`: unchanged).
+///
+/// Whether a part intersects another is asked only of the parts that could be relabelled,
+/// and answered at the first intersecting pair: overlapping copies, the usual input of a
+/// union, cost one tree over the triangles and a few queries, not an all-pairs check.
 fn place_input(
     mesh: &LabeledMesh,
     report: &ValidationReport,
@@ -305,26 +311,50 @@ fn place_input(
     let component_of = |t: TriId| {
         regions
             .shell_of(t, mesh_core::Side::Front)
-            .map(|s| component[s])
+            .map(|s| component[s] as usize)
     };
-    let mut overlapping = vec![false; component.len()];
-    if any_intersection(mesh) {
-        let all = ValidateOptions {
-            max_listed: usize::MAX,
-            placement: false,
-            ..ValidateOptions::default()
+    // Built on the first question: the triangles of each component, and a tree over all.
+    let index: OnceCell<(Vec<Vec<TriId>>, Option<Bvh>)> = OnceCell::new();
+    let overlapping: RefCell<Vec<Option<bool>>> = RefCell::new(vec![None; component.len()]);
+    let may_relabel = |t: TriId| {
+        let Some(c) = component_of(t) else {
+            return false;
         };
-        let pairs = check_intersections(mesh, &all).self_intersecting_pairs;
-        for [a, b] in pairs.map(|p| p.items).unwrap_or_default() {
-            if let (Some(ca), Some(cb)) = (component_of(a), component_of(b))
-                && ca != cb
-            {
-                overlapping[ca as usize] = true;
-                overlapping[cb as usize] = true;
-            }
+        if let Some(known) = overlapping.borrow()[c] {
+            return !known;
         }
-    }
-    let may_relabel = |t: TriId| component_of(t).is_some_and(|c| !overlapping[c as usize]);
+        let (members, bvh) = index.get_or_init(|| {
+            let mut members = vec![Vec::new(); component.len()];
+            for t in mesh.triangles() {
+                if let Some(c) = component_of(t) {
+                    members[c].push(t);
+                }
+            }
+            let alive = mesh.tri_alive_flags();
+            let bvh = Bvh::build_from_fn(mesh.triangle_capacity(), |i| {
+                if alive[i as usize] {
+                    Aabb::from_points(&mesh.tri_positions(TriId::new(i)))
+                } else {
+                    Aabb::EMPTY
+                }
+            })
+            .ok();
+            (members, bvh)
+        });
+        let hits = bvh.as_ref().is_none_or(|bvh| {
+            members[c].iter().any(|&a| {
+                let mut hit = false;
+                let b = Aabb::from_points(&mesh.tri_positions(a));
+                bvh.query(&b, 0.0, |u| {
+                    let u = TriId::new(u);
+                    hit = hit || (component_of(u) != Some(c) && triangles_intersect(mesh, a, u));
+                });
+                hit
+            })
+        });
+        overlapping.borrow_mut()[c] = Some(hits);
+        !hits
+    };
     let (placed, relabelled) = place_nested(mesh, may_relabel)
         .map_err(|e| FixError::InvalidInput(format!("relabelling nested parts failed: {e}")))?;
     for r in &relabelled {

@@ -26,9 +26,10 @@
 //! Intersecting components (an overlap, which `fix` repairs) fail here too, and are
 //! reported by layer 4 as well.
 //!
-//! Cost: one pass to find the components ([`Regions::components`]), then per component
-//! a scan of the triangles a ray may cross — all of them for a few components, a
-//! [`Bvh`] query for many.
+//! Cost: a union–find over the corner table for the components, then per component a
+//! scan of the triangles a ray may cross — all of them for a few components, a [`Bvh`]
+//! query for many. Only a component that fails is measured again, on its outer shell
+//! (which takes the region flood).
 
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
@@ -39,7 +40,6 @@ use crate::corner::Side;
 use crate::ids::{Label, TriId};
 use crate::mesh::LabeledMesh;
 use crate::predicates::{Axis, Sign, compare_crossings, cross_axis_line_triangle, orient2d_axis};
-use crate::regions::Regions;
 
 /// Candidate triangles tried per component before giving up on it (a triangle whose
 /// projection is degenerate, or whose centroid rounds outside it, is skipped).
@@ -113,43 +113,25 @@ impl MisplacedShell {
 /// wedges, finite coordinates); on other meshes the answer means little but nothing
 /// panics. A component none of whose first [`TRIES`] triangles can be cast through (all
 /// degenerate) is not judged.
-pub fn misplaced_shells(mesh: &LabeledMesh, regions: &Regions) -> Vec<MisplacedShell> {
-    let component = regions.components(mesh);
-    // The outer shell of each component: the one enclosing the most negative volume (the
-    // unbounded side; see [`crate::RegionShell::volume`]).
-    let mut outer: Vec<u32> = (0..regions.shells.len() as u32).collect();
-    for (s, shell) in regions.shells.iter().enumerate() {
-        let c = component[s] as usize;
-        if shell.volume < regions.shells[outer[c] as usize].volume {
-            outer[c] = s as u32;
-        }
-    }
-    let mut members: Vec<Vec<(TriId, Side)>> = vec![Vec::new(); regions.shells.len()];
-    let mut sizes = vec![0usize; regions.shells.len()];
+///
+/// Two passes, so that a placed mesh costs no region flood: one ray per component through
+/// any side of one of its triangles decides (by the walk argument of the module doc, one
+/// side agrees exactly when all do); only the components that fail are cast again
+/// through their outer shell ([`LabeledMesh::regions`]), which is what the report names
+/// and what [`place_nested`] relabels.
+pub fn misplaced_shells(mesh: &LabeledMesh) -> Vec<MisplacedShell> {
+    let (component, count) = surface_components(mesh);
+    let mut members: Vec<Vec<(TriId, Option<Side>)>> = vec![Vec::new(); count];
+    let mut sizes = vec![0usize; count];
     for t in mesh.triangles() {
-        let Some(s) = regions.shell_of(t, Side::Front) else {
-            continue;
-        };
-        let c = component[s] as usize;
+        let c = component[t.idx()] as usize;
         sizes[c] += 1;
-        for side in [Side::Front, Side::Back] {
-            let on_outer = regions.shell_of(t, side) == Some(outer[c] as usize);
-            if on_outer && members[c].len() < TRIES {
-                members[c].push((t, side));
-            }
+        if members[c].len() < TRIES {
+            members[c].push((t, None));
         }
     }
-    let rays: Vec<(Ray, usize)> = members
-        .iter()
-        .enumerate()
-        .filter_map(|(c, tris)| {
-            tris.iter()
-                .find_map(|&(t, side)| Ray::through(mesh, t, side))
-                .map(|r| (r, c))
-        })
-        .collect();
     let alive = mesh.tri_alive_flags();
-    let bvh = (rays.len() > SCAN_LIMIT)
+    let bvh = (count > SCAN_LIMIT)
         .then(|| {
             Bvh::build_from_fn(mesh.triangle_capacity(), |t| {
                 if alive[t as usize] {
@@ -161,25 +143,125 @@ pub fn misplaced_shells(mesh: &LabeledMesh, regions: &Regions) -> Vec<MisplacedS
             .ok()
         })
         .flatten();
+    let failing = measure(mesh, &members, bvh.as_ref());
+    if failing.is_empty() {
+        return Vec::new();
+    }
+
+    // The failing components, again through a triangle side on their outer shell: the one
+    // enclosing the most negative volume (the unbounded side; see
+    // [`crate::RegionShell::volume`]).
+    let regions = mesh.regions();
+    let mut outer: Vec<Option<usize>> = vec![None; count];
+    for t in mesh.triangles() {
+        let c = component[t.idx()] as usize;
+        if !failing.iter().any(|m| component[m.tri.idx()] as usize == c) {
+            continue;
+        }
+        for side in [Side::Front, Side::Back] {
+            if let Some(s) = regions.shell_of(t, side) {
+                let v = regions.shells[s].volume;
+                if outer[c].is_none_or(|o| v < regions.shells[o].volume) {
+                    outer[c] = Some(s);
+                }
+            }
+        }
+    }
+    let mut members: Vec<Vec<(TriId, Option<Side>)>> = vec![Vec::new(); count];
+    for t in mesh.triangles() {
+        let c = component[t.idx()] as usize;
+        for side in [Side::Front, Side::Back] {
+            if outer[c].is_some()
+                && regions.shell_of(t, side) == outer[c]
+                && members[c].len() < TRIES
+            {
+                members[c].push((t, Some(side)));
+            }
+        }
+    }
+    let mut out = measure(mesh, &members, bvh.as_ref());
+    for m in &mut out {
+        m.shell = regions
+            .shell_of(m.tri, m.side)
+            .map_or(u32::MAX, |s| s as u32);
+        m.component_triangles = sizes[component[m.tri.idx()] as usize];
+    }
+    out
+}
+
+/// Casts one ray per component through the first of its `members` (a triangle, and the
+/// side to measure or `None` for the side the ray arrives from) that can be cast through;
+/// returns the components whose measured side disagrees with its label, in order of the
+/// triangle (`shell` and `component_triangles` are the caller's to fill).
+fn measure(
+    mesh: &LabeledMesh,
+    members: &[Vec<(TriId, Option<Side>)>],
+    bvh: Option<&Bvh>,
+) -> Vec<MisplacedShell> {
+    let rays: Vec<Ray> = members
+        .iter()
+        .filter_map(|tris| {
+            tris.iter()
+                .find_map(|&(t, side)| Ray::through(mesh, t, side))
+        })
+        .collect();
     let mut out: Vec<MisplacedShell> = rays
         .par_iter()
-        .filter_map(|(ray, c)| {
-            let found = ray.vector_on_side(mesh, bvh.as_ref());
+        .filter_map(|ray| {
+            let found = ray.vector_on_side(mesh, bvh);
             let claimed = mesh.labels(ray.tri)[ray.side.index()];
-            (found.as_slice() != [(claimed, 1)]).then(|| MisplacedShell {
+            (found.as_slice() != [(claimed, 1)]).then_some(MisplacedShell {
                 tri: ray.tri,
                 side: ray.side,
                 claimed,
                 found,
-                shell: regions
-                    .shell_of(ray.tri, ray.side)
-                    .unwrap_or(u32::MAX as usize) as u32,
-                component_triangles: sizes[*c],
+                shell: u32::MAX,
+                component_triangles: 0,
             })
         })
         .collect();
     out.sort_unstable_by_key(|m| m.tri);
     out
+}
+
+/// The surface component of every triangle slot (triangles joined across edges, by
+/// union–find over the corner table's opposite pointers; dead slots in component 0 —
+/// they are never asked), numbered in order of their lowest triangle, and the count.
+fn surface_components(mesh: &LabeledMesh) -> (Vec<u32>, usize) {
+    let n = mesh.triangle_capacity();
+    let mut parent: Vec<u32> = (0..n as u32).collect();
+    fn find(parent: &mut [u32], mut i: u32) -> u32 {
+        while parent[i as usize] != i {
+            let up = parent[parent[i as usize] as usize];
+            parent[i as usize] = up;
+            i = up;
+        }
+        i
+    }
+    for t in mesh.triangles() {
+        for side in [Side::Front, Side::Back] {
+            for k in 0..3 {
+                if let Some(o) = mesh.opposite(crate::ids::CornerId::of(t, side, k)) {
+                    let (a, b) = (find(&mut parent, t.raw()), find(&mut parent, o.tri().raw()));
+                    if a != b {
+                        parent[a.max(b) as usize] = a.min(b);
+                    }
+                }
+            }
+        }
+    }
+    let mut id = vec![u32::MAX; n];
+    let mut count = 0u32;
+    let mut component = vec![0u32; n];
+    for t in mesh.triangles() {
+        let root = find(&mut parent, t.raw()) as usize;
+        if id[root] == u32::MAX {
+            id[root] = count;
+            count += 1;
+        }
+        component[t.idx()] = id[root];
+    }
+    (component, count as usize)
 }
 
 /// A line along an axis through a triangle, which it crosses, and the side of the
@@ -198,10 +280,10 @@ struct Ray {
 }
 
 impl Ray {
-    /// The line along `t`'s dominant normal axis through its centroid, to measure `side`,
-    /// if the line crosses `t` (exactly, under Simulation of Simplicity; the centroid of a
-    /// sliver may round outside it).
-    fn through(mesh: &LabeledMesh, t: TriId, side: Side) -> Option<Ray> {
+    /// The line along `t`'s dominant normal axis through its centroid, to measure `side`
+    /// (`None`: the side it arrives from), if the line crosses `t` (exactly, under
+    /// Simulation of Simplicity; the centroid of a sliver may round outside it).
+    fn through(mesh: &LabeledMesh, t: TriId, side: Option<Side>) -> Option<Ray> {
         let p = mesh.tri_positions(t);
         if !p.iter().all(|q| q.is_finite()) {
             return None;
@@ -225,7 +307,7 @@ impl Ray {
             line,
             point,
             tri: t,
-            side,
+            side: side.unwrap_or(arrives),
             arrives,
         })
     }
@@ -373,7 +455,7 @@ pub fn place_nested(
         if rounds > regions.shells.len() + 1 {
             break;
         }
-        let movable: Vec<(MisplacedShell, Label)> = misplaced_shells(current, &regions)
+        let movable: Vec<(MisplacedShell, Label)> = misplaced_shells(current)
             .into_iter()
             .filter(|m| may_relabel(m.tri))
             .filter_map(|m| {
@@ -507,7 +589,7 @@ mod tests {
     }
 
     fn misplaced(m: &LabeledMesh) -> Vec<MisplacedShell> {
-        misplaced_shells(m, &m.regions())
+        misplaced_shells(m)
     }
 
     #[test]

@@ -204,7 +204,7 @@ pub fn build(
     }
     // Before any splitting (up to millions of triangles): the trackers refuse a part
     // whose outside label is not the material it lies in, and `fix` is the remedy.
-    if let Some(m) = mesh_core::placement::misplaced_shells(&mesh, &mesh.regions()).first() {
+    if let Some(m) = mesh_core::placement::misplaced_shells(&mesh).first() {
         return Err(spec.error(format!(
             "the surface component of {} ({} triangles) is labelled material {} outside, \
              but lies in {}: a part nested in another with the wrong label outside it, or \

@@ -125,9 +125,9 @@ pub(crate) struct StructureScratch {
     group: Vec<EdgeIncidence>,
     /// Triangles of the component being flooded ([`small_component`]), in BFS order.
     component: Vec<TriId>,
-    /// Per triangle slot, the check that last flooded it ([`Self::epoch`]).
+    /// Per triangle slot, the flood that last reached it ([`Self::epoch`]).
     flooded: Vec<u32>,
-    /// The current check's stamp in `flooded`.
+    /// The last flood's stamp in `flooded`.
     epoch: u32,
     seeds: Vec<TriId>,
 }
@@ -265,11 +265,19 @@ pub(crate) fn check_structure(
 }
 
 /// Floods the surface component of `seed` over edge neighbours, breadth first, into
-/// `out`; true when it has at most [`SMALL_COMPONENT`] triangles (then `out` holds all of
-/// them), false as soon as it has more.
-fn small_component(mesh: &LabeledMesh, seed: TriId, out: &mut Vec<TriId>) -> bool {
+/// `out`, stamping each triangle reached with `stamp` in `seen`; true when it has at most
+/// [`SMALL_COMPONENT`] triangles (then `out` holds all of them), false as soon as it has
+/// more.
+fn small_component(
+    mesh: &LabeledMesh,
+    seed: TriId,
+    seen: &mut [u32],
+    stamp: u32,
+    out: &mut Vec<TriId>,
+) -> bool {
     out.clear();
     out.push(seed);
+    seen[seed.idx()] = stamp;
     let mut next = 0;
     while next < out.len() {
         let t = out[next];
@@ -280,10 +288,11 @@ fn small_component(mesh: &LabeledMesh, seed: TriId, out: &mut Vec<TriId>) -> boo
                     continue;
                 };
                 let u = o.tri();
-                if !out.contains(&u) {
+                if seen[u.idx()] != stamp {
                     if out.len() == SMALL_COMPONENT {
                         return false;
                     }
+                    seen[u.idx()] = stamp;
                     out.push(u);
                 }
             }
@@ -340,20 +349,20 @@ fn check_small_components(
     if s.flooded.len() < mesh.triangle_capacity() {
         s.flooded.resize(mesh.triangle_capacity(), 0);
     }
-    s.epoch = s.epoch.wrapping_add(1);
-    if s.epoch == 0 {
+    // One stamp per flood; a seed stamped since `first` was reached by an earlier flood
+    // of this edit. Restart the stamps before they could wrap.
+    if s.epoch > u32::MAX - 1 - seeds.len() as u32 {
         s.flooded.fill(0);
-        s.epoch = 1;
+        s.epoch = 0;
     }
+    let first = s.epoch + 1;
     let mut result = Ok(());
     for &seed in &seeds {
-        if s.flooded[seed.idx()] == s.epoch {
+        if s.flooded[seed.idx()] >= first {
             continue;
         }
-        let small = small_component(mesh, seed, &mut component);
-        for t in &component {
-            s.flooded[t.idx()] = s.epoch;
-        }
+        s.epoch += 1;
+        let small = small_component(mesh, seed, &mut s.flooded, s.epoch, &mut component);
         if !small {
             continue;
         }
@@ -375,7 +384,8 @@ fn check_small_components(
                 (p, mesh.labels(t))
             });
         // New triangles join the component of the old vertices they use.
-        let in_component = |v: VertexId| mesh.vertex_triangles(v).any(|t| component.contains(&t));
+        let (seen, stamp) = (&s.flooded, s.epoch);
+        let in_component = |v: VertexId| mesh.vertex_triangles(v).any(|t| seen[t.idx()] == stamp);
         let added = edit
             .add_tris
             .iter()
@@ -525,9 +535,10 @@ pub(crate) fn blame_moves(mesh: &LabeledMesh, edit: &Edit, fault: &StructureFaul
                 })
             }
             StructureFault::Inverts { tri, .. } => {
+                let mut seen = vec![0; mesh.triangle_capacity()];
                 let mut component = Vec::new();
-                small_component(mesh, TriId::new(tri), &mut component);
-                mesh.vertex_triangles(v).any(|t| component.contains(&t))
+                small_component(mesh, TriId::new(tri), &mut seen, 1, &mut component);
+                mesh.vertex_triangles(v).any(|t| seen[t.idx()] == 1)
             }
         }
     };
@@ -634,8 +645,7 @@ mod tests {
             edit.remove_vertices.push(b);
             edit
         }
-        let placed =
-            |m: &LabeledMesh| crate::placement::misplaced_shells(m, &m.regions()).is_empty();
+        let placed = |m: &LabeledMesh| crate::placement::misplaced_shells(m).is_empty();
 
         let mut m = build(positions.clone());
         assert!(crate::validate::validate(&m, &Default::default()).is_valid());

@@ -88,7 +88,7 @@ pub fn validate(mesh: &LabeledMesh, opts: &ValidateOptions) -> ValidationReport 
     let (mut report, ctx) = layers_to_geometry(mesh, opts);
     if opts.placement && report.is_valid() {
         let mut listed = Listed::default();
-        for m in crate::placement::misplaced_shells(mesh, &mesh.regions()) {
+        for m in crate::placement::misplaced_shells(mesh) {
             listed.push(m, opts.max_listed);
         }
         report.misplaced_shells = Some(listed);
