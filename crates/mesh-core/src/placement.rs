@@ -40,6 +40,7 @@ use crate::corner::Side;
 use crate::ids::{Label, TriId};
 use crate::mesh::LabeledMesh;
 use crate::predicates::{Axis, Sign, compare_crossings, cross_axis_line_triangle, orient2d_axis};
+use crate::union_find::{find, union};
 
 /// Candidate triangles tried per component before giving up on it (a triangle whose
 /// projection is degenerate, or whose centroid rounds outside it, is skipped).
@@ -230,22 +231,11 @@ fn measure(
 fn surface_components(mesh: &LabeledMesh) -> (Vec<u32>, usize) {
     let n = mesh.triangle_capacity();
     let mut parent: Vec<u32> = (0..n as u32).collect();
-    fn find(parent: &mut [u32], mut i: u32) -> u32 {
-        while parent[i as usize] != i {
-            let up = parent[parent[i as usize] as usize];
-            parent[i as usize] = up;
-            i = up;
-        }
-        i
-    }
     for t in mesh.triangles() {
         for side in [Side::Front, Side::Back] {
             for k in 0..3 {
                 if let Some(o) = mesh.opposite(crate::ids::CornerId::of(t, side, k)) {
-                    let (a, b) = (find(&mut parent, t.raw()), find(&mut parent, o.tri().raw()));
-                    if a != b {
-                        parent[a.max(b) as usize] = a.min(b);
-                    }
+                    union(&mut parent, t.raw(), o.tri().raw());
                 }
             }
         }

@@ -10,6 +10,7 @@
 use crate::corner::Side;
 use crate::ids::{CornerId, Label, TriId};
 use crate::mesh::LabeledMesh;
+use crate::union_find::{find, union};
 
 /// One connected component of sides.
 #[derive(Clone, Debug, PartialEq)]
@@ -52,22 +53,11 @@ impl Regions {
     /// the triangles, linear time).
     pub fn components(&self, mesh: &LabeledMesh) -> Vec<u32> {
         let mut parent: Vec<u32> = (0..self.shells.len() as u32).collect();
-        fn find(parent: &mut [u32], mut i: u32) -> u32 {
-            while parent[i as usize] != i {
-                let up = parent[parent[i as usize] as usize];
-                parent[i as usize] = up;
-                i = up;
-            }
-            i
-        }
         for t in mesh.triangles() {
             if let (Some(a), Some(b)) =
                 (self.shell_of(t, Side::Front), self.shell_of(t, Side::Back))
             {
-                let (ra, rb) = (find(&mut parent, a as u32), find(&mut parent, b as u32));
-                if ra != rb {
-                    parent[ra.max(rb) as usize] = ra.min(rb);
-                }
+                union(&mut parent, a as u32, b as u32);
             }
         }
         (0..parent.len() as u32)

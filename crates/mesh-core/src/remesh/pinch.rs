@@ -21,7 +21,7 @@ use crate::mesh::LabeledMesh;
 use super::attributes::{Blend, VertexAttributes};
 use super::edit::{Edit, NewVertex, VertexMove, VertexRef, apply_edit};
 use super::guard::EditGuard;
-use super::region_graph::{find, union};
+use crate::union_find::{find, union};
 
 /// How far each copy of a pinched vertex moves towards its component's centroid, as a
 /// fraction of the distance: far enough to separate the copies beyond rounding, close

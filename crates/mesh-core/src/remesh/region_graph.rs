@@ -26,6 +26,7 @@ use rayon::prelude::*;
 use crate::corner::Side;
 use crate::ids::{CornerId, Label, TriId, VertexId};
 use crate::mesh::LabeledMesh;
+use crate::union_find::{find, union};
 
 /// One local region at a vertex.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -216,27 +217,6 @@ fn side_of(local_side: usize) -> Side {
         Side::Front
     } else {
         Side::Back
-    }
-}
-
-/// Root of `x` in a union-find forest stored as parent links (with path halving).
-pub(super) fn find(parent: &mut [u32], mut x: u32) -> u32 {
-    while parent[x as usize] != x {
-        let up = parent[parent[x as usize] as usize];
-        parent[x as usize] = up;
-        x = up;
-    }
-    x
-}
-
-/// Joins the sets of `a` and `b`; the smaller root wins.
-pub(super) fn union(parent: &mut [u32], a: u32, b: u32) {
-    let (ra, rb) = (find(parent, a), find(parent, b));
-    // The smaller root wins, so numbering stays independent of union order.
-    if ra < rb {
-        parent[rb as usize] = ra;
-    } else if rb < ra {
-        parent[ra as usize] = rb;
     }
 }
 
