@@ -153,10 +153,14 @@ pub fn misplaced_shells(mesh: &LabeledMesh) -> Vec<MisplacedShell> {
     // enclosing the most negative volume (the unbounded side; see
     // [`crate::RegionShell::volume`]).
     let regions = mesh.regions();
+    let mut failed = vec![false; count];
+    for m in &failing {
+        failed[component[m.tri.idx()] as usize] = true;
+    }
     let mut outer: Vec<Option<usize>> = vec![None; count];
     for t in mesh.triangles() {
         let c = component[t.idx()] as usize;
-        if !failing.iter().any(|m| component[m.tri.idx()] as usize == c) {
+        if !failed[c] {
             continue;
         }
         for side in [Side::Front, Side::Back] {
@@ -181,6 +185,18 @@ pub fn misplaced_shells(mesh: &LabeledMesh) -> Vec<MisplacedShell> {
         }
     }
     let mut out = measure(mesh, &members, bvh.as_ref());
+    // A failing component whose outer shell no ray could be cast through (all its first
+    // triangles there degenerate) is still reported, as the first pass measured it.
+    let mut reported = vec![false; count];
+    for m in &out {
+        reported[component[m.tri.idx()] as usize] = true;
+    }
+    out.extend(
+        failing
+            .into_iter()
+            .filter(|m| !reported[component[m.tri.idx()] as usize]),
+    );
+    out.sort_unstable_by_key(|m| m.tri);
     for m in &mut out {
         m.shell = regions
             .shell_of(m.tri, m.side)
