@@ -184,6 +184,33 @@ def test_fix_repairs_overlapping_copies():
     assert coarse.validate(intersections=True).valid
 
 
+def test_a_nested_part_is_named_refused_and_relabelled_by_fix():
+    # Two parts made separately, each against the outside 0: the inner one says 0
+    # around it although it lies in material 1.
+    outer = surftrack.generate("sphere", radius=1.0, resolution=2)
+    inner = surftrack.generate("sphere", radius=0.5, resolution=2)
+    inner_labels = np.array(inner.labels)
+    inner_labels[inner_labels == 1] = 2
+    nested = surftrack.Mesh(
+        np.vstack([outer.vertices, inner.vertices]),
+        np.vstack([outer.triangles, np.array(inner.triangles) + len(outer.vertices)]),
+        np.vstack([outer.labels, inner_labels]),
+    )
+    report = nested.validate()
+    assert not report.valid and report.counts["misplaced_shells"] == 1
+    assert "lies in material 1" in str(report)
+    for backend in BACKENDS:
+        with pytest.raises(ValueError, match="misplaced"):
+            surftrack.Tracker(nested, backend)
+    fixed, fix_report = surftrack.fix(nested)
+    assert fixed.validate(intersections=True).valid
+    relabelled = fix_report.as_dict()["relabelled"]
+    assert [(r["from"], r["to"]) for r in relabelled] == [(0, 1)]
+    volumes = fixed.volumes()
+    assert volumes[2] == pytest.approx(inner.volumes()[1], rel=1e-12)
+    assert volumes[1] == pytest.approx(outer.volumes()[1] - inner.volumes()[1], rel=1e-12)
+
+
 def test_options_by_name_and_their_errors():
     m = surftrack.generate("double-bubble", resolution=8)
     surftrack.Tracker(m, "grid", cell_size=0.1, seed=3, **{"flaws.deep_cell_test": False})
