@@ -301,9 +301,11 @@ fn small_component(
     true
 }
 
-/// Signed volume each label encloses, restricted to the triangles `tris` (positions from
-/// `at`), relative to `origin` so that a tiny component far from the origin keeps its
-/// digits: `+` cone for the label behind a triangle, `−` for the one in front.
+/// Adds to `volumes` (`(label, before, after)`; `after` says which column) the signed
+/// volume each label encloses over the triangles `tris` (corner positions and labels):
+/// the cone from `origin` (a vertex of the component, so that a tiny component far from
+/// the coordinate origin keeps its digits), `+` for the label behind a triangle, `−` for
+/// the one in front.
 fn add_label_volumes(
     volumes: &mut Vec<(Label, f64, f64)>,
     after: bool,
