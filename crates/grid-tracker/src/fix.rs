@@ -34,7 +34,7 @@ use std::time::Instant;
 
 use glam::IVec3;
 use mesh_core::broadphase::{Aabb, Bvh};
-use mesh_core::placement::{Relabelled, place_nested};
+use mesh_core::placement::{Relabelled, place_nested, surface_components};
 use mesh_core::remesh::{ImproveReport, VertexAttributes};
 use mesh_core::validate::{
     Listed, ValidateOptions, ValidationReport, any_intersection, triangles_intersect, validate,
@@ -306,29 +306,20 @@ fn place_input(
     {
         return Ok((None, Vec::new()));
     }
-    let regions = mesh.regions();
-    let component = regions.components(mesh);
-    let component_of = |t: TriId| {
-        regions
-            .shell_of(t, mesh_core::Side::Front)
-            .map(|s| component[s] as usize)
-    };
+    let (component, count) = surface_components(mesh);
+    let component_of = |t: TriId| component[t.idx()] as usize;
     // Built on the first question: the triangles of each component, and a tree over all.
     let index: OnceCell<(Vec<Vec<TriId>>, Option<Bvh>)> = OnceCell::new();
-    let overlapping: RefCell<Vec<Option<bool>>> = RefCell::new(vec![None; component.len()]);
+    let overlapping: RefCell<Vec<Option<bool>>> = RefCell::new(vec![None; count]);
     let may_relabel = |t: TriId| {
-        let Some(c) = component_of(t) else {
-            return false;
-        };
+        let c = component_of(t);
         if let Some(known) = overlapping.borrow()[c] {
             return !known;
         }
         let (members, bvh) = index.get_or_init(|| {
-            let mut members = vec![Vec::new(); component.len()];
+            let mut members = vec![Vec::new(); count];
             for t in mesh.triangles() {
-                if let Some(c) = component_of(t) {
-                    members[c].push(t);
-                }
+                members[component_of(t)].push(t);
             }
             let alive = mesh.tri_alive_flags();
             let bvh = Bvh::build_from_fn(mesh.triangle_capacity(), |i| {
@@ -347,7 +338,7 @@ fn place_input(
                 let b = Aabb::from_points(&mesh.tri_positions(a));
                 bvh.query(&b, 0.0, |u| {
                     let u = TriId::new(u);
-                    hit = hit || (component_of(u) != Some(c) && triangles_intersect(mesh, a, u));
+                    hit = hit || (component_of(u) != c && triangles_intersect(mesh, a, u));
                 });
                 hit
             })

@@ -40,6 +40,7 @@ use crate::corner::Side;
 use crate::ids::{Label, TriId};
 use crate::mesh::LabeledMesh;
 use crate::predicates::{Axis, Sign, compare_crossings, cross_axis_line_triangle, orient2d_axis};
+use crate::regions::Regions;
 use crate::union_find::{find, union};
 
 /// Candidate triangles tried per component before giving up on it (a triangle whose
@@ -70,6 +71,22 @@ pub struct MisplacedShell {
     pub shell: u32,
     /// Triangles in the component.
     pub component_triangles: usize,
+}
+
+impl std::fmt::Display for MisplacedShell {
+    /// "the surface component of t7 (320 triangles) is labelled material 0 outside, but
+    /// lies in material 1".
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "the surface component of {} ({} triangles) is labelled material {} outside, but \
+             lies in {}",
+            self.tri,
+            self.component_triangles,
+            self.claimed.raw(),
+            self.found_text()
+        )
+    }
 }
 
 impl MisplacedShell {
@@ -121,6 +138,12 @@ impl MisplacedShell {
 /// through their outer shell ([`LabeledMesh::regions`]), which is what the report names
 /// and what [`place_nested`] relabels.
 pub fn misplaced_shells(mesh: &LabeledMesh) -> Vec<MisplacedShell> {
+    locate(mesh).0
+}
+
+/// [`misplaced_shells`], with the regions its second pass flooded (`None` when every
+/// component passed the first): the shells the findings name.
+fn locate(mesh: &LabeledMesh) -> (Vec<MisplacedShell>, Option<Regions>) {
     let (component, count) = surface_components(mesh);
     let mut members: Vec<Vec<(TriId, Option<Side>)>> = vec![Vec::new(); count];
     let mut sizes = vec![0usize; count];
@@ -146,7 +169,7 @@ pub fn misplaced_shells(mesh: &LabeledMesh) -> Vec<MisplacedShell> {
         .flatten();
     let failing = measure(mesh, &members, bvh.as_ref());
     if failing.is_empty() {
-        return Vec::new();
+        return (Vec::new(), None);
     }
 
     // The failing components, again through a triangle side on their outer shell: the one
@@ -203,7 +226,7 @@ pub fn misplaced_shells(mesh: &LabeledMesh) -> Vec<MisplacedShell> {
             .map_or(u32::MAX, |s| s as u32);
         m.component_triangles = sizes[component[m.tri.idx()] as usize];
     }
-    out
+    (out, Some(regions))
 }
 
 /// Casts one ray per component through the first of its `members` (a triangle, and the
@@ -244,7 +267,8 @@ fn measure(
 /// The surface component of every triangle slot (triangles joined across edges, by
 /// union–find over the corner table's opposite pointers; dead slots in component 0 —
 /// they are never asked), numbered in order of their lowest triangle, and the count.
-fn surface_components(mesh: &LabeledMesh) -> (Vec<u32>, usize) {
+/// No region flood: cheaper than [`Regions::components`] when shells are not needed.
+pub fn surface_components(mesh: &LabeledMesh) -> (Vec<u32>, usize) {
     let n = mesh.triangle_capacity();
     let mut parent: Vec<u32> = (0..n as u32).collect();
     for t in mesh.triangles() {
@@ -456,12 +480,15 @@ pub fn place_nested(
     let mut rounds = 0;
     loop {
         let current = work.as_ref().unwrap_or(mesh);
-        let regions = current.regions();
         rounds += 1;
+        let (misplaced, regions) = locate(current);
+        let Some(regions) = regions else {
+            break;
+        };
         if rounds > regions.shells.len() + 1 {
             break;
         }
-        let movable: Vec<(MisplacedShell, Label)> = misplaced_shells(current)
+        let movable: Vec<(MisplacedShell, Label)> = misplaced
             .into_iter()
             .filter(|m| may_relabel(m.tri))
             .filter_map(|m| {
@@ -550,21 +577,16 @@ fn without_triangles(
 /// repair must revisit for a [`MisplacedShell`], which names one triangle of its
 /// component.
 pub fn component_triangles(mesh: &LabeledMesh, tris: &[TriId]) -> Vec<TriId> {
-    let regions = mesh.regions();
-    let component = regions.components(mesh);
-    let of = |t: TriId| {
-        regions
-            .shell_of(t, Side::Front)
-            .map(|s| component[s] as usize)
-    };
-    let mut wanted = vec![false; component.len()];
+    let (component, count) = surface_components(mesh);
+    let mut wanted = vec![false; count];
+    let alive = mesh.tri_alive_flags();
     for &t in tris {
-        if let Some(c) = of(t) {
-            wanted[c] = true;
+        if alive.get(t.idx()).copied().unwrap_or(false) {
+            wanted[component[t.idx()] as usize] = true;
         }
     }
     mesh.triangles()
-        .filter(|&t| of(t).is_some_and(|c| wanted[c]))
+        .filter(|&t| wanted[component[t.idx()] as usize])
         .collect()
 }
 

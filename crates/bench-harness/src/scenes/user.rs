@@ -206,14 +206,9 @@ pub fn build(
     // whose outside label is not the material it lies in, and `fix` is the remedy.
     if let Some(m) = mesh_core::placement::misplaced_shells(&mesh).first() {
         return Err(spec.error(format!(
-            "the surface component of {} ({} triangles) is labelled material {} outside, \
-             but lies in {}: a part nested in another with the wrong label outside it, or \
-             overlapping it. `surftrack fix IN OUT` relabels nested parts and repairs \
-             overlaps; run on its output",
-            m.tri,
-            m.component_triangles,
-            m.claimed.raw(),
-            m.found_text()
+            "{m}: a part nested in another with the wrong label outside it, or overlapping \
+             it. `surftrack fix IN OUT` relabels nested parts and repairs overlaps; run on \
+             its output"
         )));
     }
     let mesh = fit_mesh(mesh, o.resolution).map_err(|m| spec.error(m))?;

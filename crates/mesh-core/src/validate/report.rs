@@ -287,16 +287,7 @@ impl fmt::Display for ValidationReport {
         })?;
         category(f, "zero-area triangles", &self.zero_area, |t| t.to_string())?;
         if let Some(shells) = &self.misplaced_shells {
-            category(f, "misplaced shells", shells, |m| {
-                format!(
-                    "the surface component of {} ({} triangles) is labelled material {} \
-                     outside, but lies in {}",
-                    m.tri,
-                    m.component_triangles,
-                    m.claimed.raw(),
-                    m.found_text()
-                )
-            })?;
+            category(f, "misplaced shells", shells, |m| m.to_string())?;
         }
         if let Some(pairs) = &self.self_intersecting_pairs {
             category(f, "self-intersecting triangle pairs", pairs, |[a, b]| {
