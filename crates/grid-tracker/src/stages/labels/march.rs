@@ -335,16 +335,19 @@ pub fn march_over(
 /// The region's nodes at the two resolutions of [`march_far_field`].
 pub trait Levels {
     /// The nodes with the full stencil (every neighbour one lattice step away).
-    fn fine(&self) -> &impl Nodes;
+    fn fine(&self) -> &(impl Nodes + Sync);
     /// The coarse nodes (lattice coordinates multiples of the block) with the stencil
     /// scaled by the block; [`Nodes::for_each_neighbour`] is only asked about them.
-    fn coarse(&self) -> &impl Nodes;
+    fn coarse(&self) -> &(impl Nodes + Sync);
     /// Whether node `i` is a coarse node.
     fn is_coarse(&self, i: u32) -> bool;
     /// The coarse nodes at the corners of the coarse cell holding node `i` (a coarse node
     /// is the lowest corner of its own cell); [`NO_NODE`] where a corner is no region
     /// node.
     fn coarse_corners(&self, i: u32) -> [u32; 8];
+    /// The coarse nodes at the corners of the 3 × 3 × 3 coarse cells centred on the one
+    /// holding node `i`; [`NO_NODE`] where a corner is no region node.
+    fn coarse_around(&self, i: u32) -> [u32; 64];
 }
 
 /// Marks a missing coarse corner in [`Levels::coarse_corners`].
@@ -378,15 +381,19 @@ pub struct FarFieldStats {
 ///    cell's eight corners hold (and its own, if it has one), independently, in parallel.
 /// 4. **Refine**: where those corners carry more than one label (a label interface runs
 ///    through the coarse cell) or none reached the node, grown by one node so that every
-///    edge across which labels may change has both ends refined, the fine march resumes
-///    over those nodes only, from their points and those of their other neighbours.
+///    edge across which labels may change has both ends refined, each of those nodes takes
+///    the nearest of the points held by the coarse nodes of the 3 × 3 × 3 coarse cells
+///    around its own and by its band neighbours — independently, in parallel, so the
+///    refinement costs a fixed amount per node instead of a heap-ordered march.
+/// 5. **Rest**: a flagged node that none of those reach (a coarse corner outside the
+///    region) is marched over such nodes only, from its reached neighbours.
 ///
 /// Beyond the band a node's point may be up to about ℓ/2 farther than the plain march's
 /// where its coarse cell is not refined; it has the same label there (all corners agree),
 /// and §8.3 reads points only across label changes, which are refined.
 ///
-/// Deterministic: levels 1, 2 and 4 are sequential in the order of [`march_over`], level
-/// 3 is a pure function per node.
+/// Deterministic: levels 1, 2 and 5 are sequential in the order of [`march_over`], levels
+/// 3 and 4 are pure functions per node (ties go to the lower point id).
 pub fn march_far_field(
     levels: &(impl Levels + Sync),
     points: &[BreakingPoint],
@@ -477,18 +484,68 @@ pub fn march_far_field(
     flagged.sort_unstable();
     stats.refined_nodes = flagged.len();
 
-    // 4. Refine, over the flagged nodes only.
+    // 4. Refine: every flagged node takes the nearest of the points held by the coarse
+    //    nodes around its coarse cell and by its fine neighbours in the band,
+    //    independently, in parallel.
+    let snapshot: &[Slot] = slots;
+    let refined: Vec<Slot> = flagged
+        .par_iter()
+        .map(|&i| {
+            let at = fine.position(i);
+            let mut best = snapshot[i as usize];
+            let consider = |point: u32, best: &mut Slot| {
+                if point >= Slot::CLOSED || point == best.point {
+                    return;
+                }
+                let distance = at.distance(points[point as usize].position);
+                if best.point >= Slot::CLOSED
+                    || distance < best.distance
+                    || (distance == best.distance && point < best.point)
+                {
+                    *best = Slot { distance, point };
+                }
+            };
+            for c in levels.coarse_around(i) {
+                if let Some(s) = snapshot.get(c as usize) {
+                    consider(s.point, &mut best);
+                }
+            }
+            fine.for_each_neighbour(i, |j, _| {
+                if near[j as usize] {
+                    consider(snapshot[j as usize].point, &mut best);
+                }
+            });
+            best
+        })
+        .collect();
+    for (&i, slot) in flagged.iter().zip(refined) {
+        slots[i as usize] = slot;
+    }
+
+    // 5. Rest: a flagged node none of those reach (the region is not a full box, so a
+    //    coarse node may be missing) is marched from its neighbours, over such nodes only.
+    let unreached: Vec<u32> = flagged
+        .iter()
+        .copied()
+        .filter(|&i| slots[i as usize].point >= Slot::CLOSED)
+        .collect();
+    if unreached.is_empty() {
+        return stats;
+    }
+    let mut open = vec![false; n];
+    for &i in &unreached {
+        open[i as usize] = true;
+    }
     let only = Only {
         nodes: fine,
-        open: &refine,
+        open: &open,
     };
     let mut marching = Marching::new();
-    for &i in &flagged {
-        marching.resume(slots, i);
+    for &i in &unreached {
         let at = fine.position(i);
         fine.for_each_neighbour(i, |j, _| {
             let s = slots[j as usize];
-            if !refine[j as usize] && s.point < Slot::CLOSED {
+            if !open[j as usize] && s.point < Slot::CLOSED {
                 let position = points[s.point as usize].position;
                 marching.offer(slots, i, at, s.point, position);
             }

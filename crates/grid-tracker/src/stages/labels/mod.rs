@@ -16,7 +16,8 @@
 //!   breaking point itself, so distances are true Euclidean distances to it). Physical
 //!   nodes relay points without taking their labels. Farther than 8 cells from every
 //!   breaking point (the inside of overlapping solids) the march runs on a 4× coarser
-//!   lattice and refines only where labels change ([`march::march_far_field`]; not in the
+//!   lattice; nodes between coarse nodes take the nearest of the coarse points around
+//!   them, looking wider where labels change ([`march::march_far_field`]; not in the
 //!   paper, which marches every node).
 //!
 //! Fallback (not in the paper, which assumes every non-physical component touches a
@@ -589,11 +590,11 @@ impl<'a> RegionLevels<'a> {
 }
 
 impl march::Levels for RegionLevels<'_> {
-    fn fine(&self) -> &impl march::Nodes {
+    fn fine(&self) -> &(impl march::Nodes + Sync) {
         &self.fine
     }
 
-    fn coarse(&self) -> &impl march::Nodes {
+    fn coarse(&self) -> &(impl march::Nodes + Sync) {
         &self.coarse
     }
 
@@ -616,6 +617,22 @@ impl march::Levels for RegionLevels<'_> {
         std::array::from_fn(|k| {
             let k = k as i32;
             let corner = base + IVec3::new(k & 1, (k >> 1) & 1, (k >> 2) & 1) * b;
+            self.fine.index.get(corner).unwrap_or(march::NO_NODE)
+        })
+    }
+
+    #[inline]
+    fn coarse_around(&self, i: u32) -> [u32; 64] {
+        let p = self.fine.nodes[i as usize];
+        let b = self.coarse.step;
+        let base = IVec3::new(
+            p.x.div_euclid(b) - 1,
+            p.y.div_euclid(b) - 1,
+            p.z.div_euclid(b) - 1,
+        ) * b;
+        std::array::from_fn(|k| {
+            let k = k as i32;
+            let corner = base + IVec3::new(k & 3, (k >> 2) & 3, k >> 4) * b;
             self.fine.index.get(corner).unwrap_or(march::NO_NODE)
         })
     }
