@@ -544,6 +544,10 @@ impl EditGuard for DeadlineGuard {
         self.inner.check_vertex(mesh, v)
     }
 
+    fn precheck(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), Veto> {
+        self.inner.precheck(mesh, edit)
+    }
+
     fn check(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), Veto> {
         if Instant::now() >= self.deadline {
             return Err(Veto::TimeBudget);

@@ -285,6 +285,11 @@ pub(crate) fn collapse_edge_in(
         }
         CollapsePlacement::Midpoint => (None, 0.5),
     };
+    // a moves unless it keeps its place: a guard that refuses moving it refuses the edit,
+    // asked before the edit is built and measured.
+    if t != 0.0 {
+        guard.check_vertex(mesh, a).map_err(EditError::Vetoed)?;
+    }
     let mut target = if t == 0.0 {
         pa
     } else if t == 1.0 {

@@ -198,6 +198,7 @@ pub fn apply_edit(
     edit: &Edit,
 ) -> Result<Applied, EditError> {
     edit.check(mesh)?;
+    guard.precheck(mesh, edit).map_err(EditError::Vetoed)?;
     STRUCTURE
         .with_borrow_mut(|s| check_structure(mesh, edit, s))
         .map_err(EditError::Structure)?;

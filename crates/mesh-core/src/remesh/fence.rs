@@ -124,6 +124,20 @@ impl<'g> FenceGuard<'g> {
         None
     }
 
+    /// The fence's own verdict on `edit`, noting what the box alone holds back.
+    fn refuse(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), Veto> {
+        let Some((tri, held)) = self.refusal(mesh, edit) else {
+            return Ok(());
+        };
+        if held {
+            self.defer(mesh, edit);
+        }
+        Err(match tri {
+            Some(tri) => Veto::OutsideRegion { tri },
+            None => Veto::Other("outside the block"),
+        })
+    }
+
     /// Notes the vertices of an edit refused only because of the box.
     fn defer(&mut self, mesh: &LabeledMesh, edit: &Edit) {
         for &t in &edit.remove_tris {
@@ -154,19 +168,14 @@ impl EditGuard for FenceGuard<'_> {
         }
     }
 
+    fn precheck(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), Veto> {
+        self.refuse(mesh, edit)?;
+        self.inner.precheck(mesh, edit)
+    }
+
     fn check(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), Veto> {
-        match self.refusal(mesh, edit) {
-            Some((tri, held)) => {
-                if held {
-                    self.defer(mesh, edit);
-                }
-                Err(match tri {
-                    Some(tri) => Veto::OutsideRegion { tri },
-                    None => Veto::Other("outside the block"),
-                })
-            }
-            None => self.inner.check(mesh, edit),
-        }
+        self.refuse(mesh, edit)?;
+        self.inner.check(mesh, edit)
     }
 
     /// Moves off the fence are blamed first (the caller asks again without them); a batch
@@ -204,5 +213,58 @@ impl EditGuard for FenceGuard<'_> {
             }
         }
         self.inner.committed(mesh, edit, applied);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec3;
+
+    use super::*;
+    use crate::generators::icosphere;
+    use crate::ids::Label;
+    use crate::remesh::structure::StructureFault;
+    use crate::remesh::{EditError, NoGuard, VertexAttributes, apply_edit};
+
+    /// An edit that takes one triangle out of a closed sphere leaves boundary edges: the
+    /// structural check refuses it. Fenced, it is refused by the fence first, without the
+    /// structural check being asked (the precheck is the cheap half of the guard).
+    #[test]
+    fn a_fenced_edit_is_refused_before_its_structure_is_checked() {
+        let mut mesh = icosphere(1, DVec3::ZERO, 1.0, [Label::new(0), Label::new(1)]).unwrap();
+        let before = mesh.to_raw();
+        let hole = Edit {
+            remove_tris: vec![TriId::new(3)],
+            ..Edit::default()
+        };
+        let mut attrs = VertexAttributes::none();
+        let open = apply_edit(
+            &mut mesh,
+            &mut attrs,
+            &mut FenceGuard::open(&mut NoGuard),
+            &hole,
+        );
+        assert!(
+            matches!(
+                open,
+                Err(EditError::Structure(StructureFault::Boundary { .. }))
+            ),
+            "{open:?}"
+        );
+        let mut editable = vec![true; mesh.triangle_capacity()];
+        editable[3] = false;
+        let fenced = apply_edit(
+            &mut mesh,
+            &mut attrs,
+            &mut FenceGuard::new(&mut NoGuard, editable),
+            &hole,
+        );
+        assert_eq!(
+            fenced,
+            Err(EditError::Vetoed(Veto::OutsideRegion {
+                tri: TriId::new(3)
+            }))
+        );
+        assert_eq!(mesh.to_raw(), before);
     }
 }

@@ -104,6 +104,18 @@ pub trait EditGuard {
         Ok(())
     }
 
+    /// A cheap necessary condition of [`EditGuard::check`] for `edit` itself: `Err` means
+    /// `check` would veto it, for this reason. [`super::apply_edit`] asks it before the
+    /// edit's structural check and `check` after it. Default: no objection.
+    ///
+    /// Why: the structural check costs a few radial sorts and a small-component flood per
+    /// edit, and a fence refuses its edits with a few lookups. On `fix` of six notched
+    /// spheres (1.08M triangles), 434k of 1.1M collapse attempts were refused by a block's
+    /// fence, each after a full structural check; asking first made the run 1.2 % faster.
+    fn precheck(&mut self, _mesh: &LabeledMesh, _edit: &Edit) -> Result<(), Veto> {
+        Ok(())
+    }
+
     /// Decides on a *batch*: an edit that only moves vertices, no two of which share a
     /// triangle (batched smoothing). `None`: the whole batch may be committed, exactly as
     /// if [`EditGuard::check`] had passed it. `Some(blamed)`: the indices into

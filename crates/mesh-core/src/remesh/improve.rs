@@ -699,6 +699,11 @@ impl EditGuard for Recorder<'_> {
         self.count(verdict)
     }
 
+    fn precheck(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), Veto> {
+        let verdict = self.inner.precheck(mesh, edit);
+        self.count(verdict)
+    }
+
     fn committed(&mut self, mesh: &LabeledMesh, edit: &Edit, applied: &Applied) {
         self.inner.committed(mesh, edit, applied);
         if self.recording {
