@@ -62,13 +62,17 @@
 //! The follower's own mesh ([`Follower::mesh`]) is the tracker's mesh re-projected onto
 //! `F(·, t₁)`: the tracker's repairs and smoothing move vertices slightly off the
 //! surface, and the next frame's proposal starts from these projected positions anyway.
+//! The re-projection is guarded ([`reproject`]), so every frame handed out is valid with
+//! the exact intersection check; around a merge or a cut some vertices wait off the
+//! surface (counted in [`FrameReport::unprojected`]) while the tracker, which starts the
+//! next frame from the unguarded projection, resolves the change.
 
 use std::collections::HashSet;
 use std::time::Instant;
 
 use glam::DVec3;
 use grid_tracker::{GridParams, GridTracker, ImproveScope};
-use mesh_core::remesh::VertexAttributes;
+use mesh_core::remesh::{self, SmoothParams, StaticIntersectionGuard, VertexAttributes};
 use mesh_core::{Label, LabeledMesh, RegionCensus, StepReport, SurfaceTracker, VertexId};
 use rayon::prelude::*;
 
@@ -373,21 +377,48 @@ pub fn propose(
 }
 
 /// Projects every live vertex of `mesh` onto `F(·, t) = 0` in place (no relaxation, no
-/// hints). A vertex whose walk fails (it sits at a critical point of `F`, where the
-/// gradient gives no direction) is retried from its position nudged by `¼·max_travel`,
-/// then `½·max_travel`, along its outward mesh normal (outward when `F > 0`, inward
-/// when `F < 0`: towards the surface), which breaks the symmetry that stalled it; if all
-/// fail it keeps its position. Returns the number of vertices left unprojected and the
-/// largest first-order distance `|F|/‖∇F‖` left on the projected ones.
+/// hints), as far as the mesh stays valid: [`projection_targets`], committed as guarded
+/// moves ([`commit_moves`] under a [`StaticIntersectionGuard`]). A move that would turn
+/// a triangle over or make two triangles intersect is held back and the vertex keeps its
+/// position.
+///
+/// Why guarded: around a merge or a cut the tracker has not caught up with the field
+/// yet, and its mesh projected freely folds there. Measured on the three blobs of
+/// `scenes::triple` (ℓ = 0.12, 30 frames): the frames where they merge and separate had
+/// 73–173 intersecting triangle pairs, and as they separated the tracker left a closed
+/// piece of 76 triangles at the centre, every vertex at `F < 0`, which the projection
+/// spread over the surrounding blobs inside out. Guarded, every frame validates; up to
+/// 8 % of the vertices (nearly all of them for turning a triangle over) wait off the
+/// surface, for at most three frames in a row, while the tracker resolves the change
+/// ([`Follower`] starts each frame from the unguarded projection, so the tracker's
+/// course is unchanged).
+///
+/// Returns the number of live vertices left off the surface (walk failed or move held
+/// back) and the largest first-order distance `|F|/‖∇F‖` on the others.
+///
+/// [`commit_moves`]: mesh_core::remesh::commit_moves
 pub fn reproject(
     mesh: &mut LabeledMesh,
     field: &(impl ImplicitField + ?Sized),
     t: f64,
     params: &ProjectParams,
 ) -> (usize, f64) {
-    let alive: Vec<bool> = (0..mesh.vertex_capacity())
-        .map(|v| mesh.is_vertex_alive(VertexId::new(v as u32)))
-        .collect();
+    let targets = projection_targets(mesh, field, t, params);
+    commit_targets(mesh, field, t, &targets)
+}
+
+/// Where [`reproject`] would take every vertex slot: `None` for dead slots and for live
+/// vertices whose walk fails. A walk that fails (the vertex sits at a critical point of
+/// `F`, where the gradient gives no direction) is retried from the position nudged by
+/// `¼·max_travel`, then `½·max_travel`, along its outward mesh normal (outward when
+/// `F > 0`, inward when `F < 0`: towards the surface), which breaks the symmetry that
+/// stalled it.
+fn projection_targets(
+    mesh: &LabeledMesh,
+    field: &(impl ImplicitField + ?Sized),
+    t: f64,
+    params: &ProjectParams,
+) -> Vec<Option<DVec3>> {
     // Oriented, as in [`propose`]: a tracker mesh still overlapping itself must not be
     // folded onto the other sheet's surface by the re-projection either. Where the own
     // sheet's ray finds no surface within reach (a rebuilt vertex whose normal runs
@@ -402,43 +433,74 @@ pub fn reproject(
         };
         (!pr.is_quasi_critical() && pr.position.is_finite()).then_some(pr.position)
     };
-    let mut results: Vec<Option<DVec3>> = mesh
-        .positions()
-        .par_iter()
-        .zip(alive.par_iter())
-        .zip(normals.par_iter())
+    (0..mesh.vertex_capacity())
+        .into_par_iter()
         .with_min_len(256)
-        .map(|((&p, &live), &n)| if live { attempt(p, n) } else { Some(p) })
-        .collect();
-    if results.iter().any(Option::is_none) {
-        for (v, r) in results.iter_mut().enumerate() {
-            if r.is_some() {
-                continue;
+        .map(|v| {
+            if !mesh.is_vertex_alive(VertexId::new(v as u32)) {
+                return None;
             }
-            let p = mesh.positions()[v];
-            let toward = if field.value(p, t) > 0.0 { 1.0 } else { -1.0 };
-            *r = [0.25, 0.5].iter().find_map(|&s| {
-                attempt(
-                    p + normals[v] * (toward * s * params.max_travel),
-                    normals[v],
-                )
-            });
-        }
-    }
-    let mut failed = 0;
+            let (p, n) = (mesh.positions()[v], normals[v]);
+            attempt(p, n).or_else(|| {
+                let toward = if field.value(p, t) > 0.0 { 1.0 } else { -1.0 };
+                [0.25, 0.5]
+                    .iter()
+                    .find_map(|&s| attempt(p + n * (toward * s * params.max_travel), n))
+            })
+        })
+        .collect()
+}
+
+/// Moves every vertex to its target as far as the mesh stays valid ([`reproject`]);
+/// returns the live vertices left off the surface and the largest `|F|/‖∇F‖` on the
+/// others.
+fn commit_targets(
+    mesh: &mut LabeledMesh,
+    field: &(impl ImplicitField + ?Sized),
+    t: f64,
+    targets: &[Option<DVec3>],
+) -> (usize, f64) {
+    let before = mesh.positions().to_vec();
+    let moves: Vec<remesh::Proposal> = targets
+        .iter()
+        .enumerate()
+        .filter_map(|(v, q)| {
+            let displacement = (*q)? - before[v];
+            (displacement != DVec3::ZERO).then_some(remesh::Proposal {
+                vertex: VertexId::new(v as u32),
+                displacement,
+                normal: None,
+            })
+        })
+        .collect();
+    // No rotation limit and no volume limit: the projection decides where the surface
+    // is; only a triangle turned over (the local check) or an intersection (the guard)
+    // holds a vertex back.
+    let checks = SmoothParams {
+        min_normal_cos: -1.0,
+        ..SmoothParams::default()
+    };
+    remesh::commit_moves(
+        mesh,
+        &mut VertexAttributes::none(),
+        &mut StaticIntersectionGuard::new(),
+        &checks,
+        &moves,
+    );
+    let mut off = 0;
     let mut worst: f64 = 0.0;
-    for (v, r) in results.into_iter().enumerate() {
-        match r {
-            Some(q) if alive[v] => {
-                mesh.positions_mut()[v] = q;
-                let (f, g) = field.value_and_gradient(q, t);
+    for v in mesh.vertices() {
+        // Moved (to its target, up to the rounding of `p + (q − p)`), or already there.
+        let p = mesh.position(v);
+        match targets[v.idx()] {
+            Some(q) if p != before[v.idx()] || q == p => {
+                let (f, g) = field.value_and_gradient(p, t);
                 worst = worst.max(f.abs() / g.length().max(f64::MIN_POSITIVE));
             }
-            Some(_) => {}
-            None => failed += 1,
+            _ => off += 1,
         }
     }
-    (failed, worst)
+    (off, worst)
 }
 
 /// The triangles of the surface components (triangles joined through shared vertices)
@@ -534,7 +596,8 @@ pub struct FrameReport {
     pub components: usize,
     /// Quasi-critical points of the proposal (before the tracker).
     pub quasi_critical: Vec<QuasiCritical>,
-    /// Vertices left off the surface by the final re-projection.
+    /// Vertices left off the surface by the final re-projection: its walk failed, or the
+    /// move would have turned a triangle over or made two intersect ([`reproject`]).
     pub unprojected: usize,
     /// Largest `|F|/‖∇F‖` over the projected output vertices.
     pub max_residual: f64,
@@ -555,7 +618,15 @@ pub struct Follower<F: ImplicitField> {
     field: F,
     params: FollowParams,
     tracker: GridTracker,
+    /// The valid mesh handed out: the tracker's, re-projected as far as it stays valid.
     mesh: LabeledMesh,
+    /// The tracker's mesh with every vertex on its projection, valid or not: where the
+    /// next proposal starts. Why not [`Self::mesh`]: a vertex held back there would
+    /// lag a frame behind the field at every merge and cut, and the tracker, fed its
+    /// stale position, resolves the change differently (the three blobs' merge came
+    /// apart into two and three components for four frames); the tracker checks its own
+    /// step, so its input need not be valid.
+    basis: LabeledMesh,
     time: f64,
     next_tag: u64,
 }
@@ -615,6 +686,7 @@ impl<F: ImplicitField> Follower<F> {
             field,
             params,
             tracker,
+            basis: mesh.clone(),
             mesh,
             time: t0,
             next_tag,
@@ -707,7 +779,7 @@ impl<F: ImplicitField> Follower<F> {
             return Err(invalid("Follower::advance_to", "t", t, "finite"));
         }
         let start = Instant::now();
-        let proposal = propose(&self.mesh, &self.field, t, &self.params)?;
+        let proposal = propose(&self.basis, &self.field, t, &self.params)?;
         let before: HashSet<u64> = self
             .tracker
             .mesh()
@@ -744,9 +816,15 @@ impl<F: ImplicitField> Follower<F> {
             max_travel: 2.0 * pp.max_travel,
             ..pp
         };
-        let (unprojected, max_residual) = reproject(&mut mesh, &self.field, t, &far);
+        let targets = projection_targets(&mesh, &self.field, t, &far);
+        let mut basis = mesh.clone();
+        for (p, q) in basis.positions_mut().iter_mut().zip(&targets) {
+            *p = q.unwrap_or(*p);
+        }
+        let (unprojected, max_residual) = commit_targets(&mut mesh, &self.field, t, &targets);
         let components = RegionCensus::of(&mesh).components;
         self.mesh = mesh;
+        self.basis = basis;
         self.time = t;
         Ok(FrameReport {
             t,

@@ -21,10 +21,14 @@ fn run(anim: &scenes::Animation, tol: f64) -> Vec<usize> {
     let params = FollowParams::new(anim.edge_length);
     let mut f = Follower::new(anim.field.clone(), anim.t0, None, params).unwrap();
     let mut comps = Vec::new();
+    let mut frames_off = 0;
     for k in 1..=anim.frames {
         let t = anim.time(k, anim.frames);
         let r = f.advance_to(t).unwrap_or_else(|e| panic!("frame {k}: {e}"));
-        let report = validate(f.mesh(), &ValidateOptions::default());
+        // Valid with the exact intersection check: the re-projection holds back a vertex
+        // whose move would fold the mesh (before, the frames where the blobs merge and
+        // separate intersected themselves, and one left an inside-out piece).
+        let report = validate(f.mesh(), &ValidateOptions::with_intersections());
         assert!(report.is_valid(), "frame {k} (t = {t}): {report}");
         // Within tolerance of F = 0: first-order distance |F|/|∇F| at every vertex.
         let mut worst: f64 = 0.0;
@@ -45,16 +49,19 @@ fn run(anim: &scenes::Animation, tol: f64) -> Vec<usize> {
         );
         // A vertex the re-projection could not place is one still in flight across a gap
         // closing under it (its own sheet's ray meets no surface within reach, e.g. the
-        // wall of the channel the three blobs close at the centre): the tracker merges it
-        // a frame later. Those are reported, few, and gone by the end; every other vertex
-        // is on the surface.
+        // wall of the channel the three blobs close at the centre), or one whose move
+        // would turn a triangle over where the tracker's mesh has not caught up with a
+        // merge or a cut yet: the tracker resolves it within a few frames. Those are
+        // reported, around the topology changes only, and gone by the end; every other
+        // vertex is on the surface.
         if r.unprojected == 0 {
             assert!(
                 worst < tol * anim.edge_length,
                 "frame {k}: |F|/|∇F| = {worst}"
             );
         } else {
-            assert!(r.unprojected * 100 <= r.vertices, "frame {k}: {r:?}");
+            frames_off += 1;
+            assert!(r.unprojected * 100 <= 10 * r.vertices, "frame {k}: {r:?}");
             assert!(
                 r.max_residual < tol * anim.edge_length,
                 "frame {k}: |F|/|∇F| = {}",
@@ -66,6 +73,10 @@ fn run(anim: &scenes::Animation, tol: f64) -> Vec<usize> {
         }
         comps.push(r.components);
     }
+    assert!(
+        frames_off * 3 <= anim.frames,
+        "{frames_off} frames off the surface"
+    );
     comps
 }
 
