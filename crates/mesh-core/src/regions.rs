@@ -72,54 +72,63 @@ impl Regions {
 }
 
 impl LabeledMesh {
-    /// Flood-fills sides over opposite pointers into [`Regions`]. Linear time, no recursion.
+    /// Groups sides joined by opposite pointers into [`Regions`]: a union–find over the
+    /// sides, then one pass in side order numbering the shells and summing their
+    /// measures. Linear time, no recursion.
+    ///
+    /// Why not a flood: a flood visits sides in the order it reaches them, scattered over
+    /// the mesh's arrays; both passes here read them in order. Measured on `fix`'s scale
+    /// stage (this and two sums over the triangles) of 6 notched-sphere copies at 5.27M
+    /// triangles: 1.24 s with the flood. The shells, their numbering (by lowest side) and
+    /// every side's shell are the flood's; volume and area are summed in side order.
     pub fn regions(&self) -> Regions {
         let n_sides = self.triangle_capacity() * 2;
+        let mut parent: Vec<u32> = (0..n_sides as u32).collect();
+        let mut joined = |s: usize| {
+            for k in 0..3 {
+                if let Some(o) = self.opposite(CornerId::new((s * 3 + k) as u32)) {
+                    union(&mut parent, s as u32, o.side_index() as u32);
+                }
+            }
+        };
+        for t in self.triangles() {
+            joined(t.idx() * 2);
+            joined(t.idx() * 2 + 1);
+        }
+        // The root of a set is its smallest side, met first below: shells are numbered in
+        // order of their lowest side, as a flood from each unvisited side in turn would.
         let mut side_shell = vec![u32::MAX; n_sides];
-        let mut shells = Vec::new();
-        let mut stack: Vec<u32> = Vec::new();
+        let mut shells: Vec<RegionShell> = Vec::new();
         for t in self.triangles() {
             for side in [Side::Front, Side::Back] {
-                let start = t.idx() * 2 + side.index();
-                if side_shell[start] != u32::MAX {
-                    continue;
+                let s = t.idx() * 2 + side.index();
+                let root = find(&mut parent, s as u32) as usize;
+                if root == s {
+                    side_shell[s] = shells.len() as u32;
+                    shells.push(RegionShell {
+                        label: self.labels(t)[side.index()],
+                        sides: 0,
+                        consistent: true,
+                        closed: true,
+                        volume: 0.0,
+                        area: 0.0,
+                    });
+                } else {
+                    side_shell[s] = side_shell[root];
                 }
-                let id = shells.len() as u32;
-                let label = self.labels(t)[side.index()];
-                let mut shell = RegionShell {
-                    label,
-                    sides: 0,
-                    consistent: true,
-                    closed: true,
-                    volume: 0.0,
-                    area: 0.0,
-                };
-                side_shell[start] = id;
-                stack.push(start as u32);
-                while let Some(s) = stack.pop() {
-                    let c0 = CornerId::new(s * 3);
-                    shell.sides += 1;
-                    shell.consistent &= self.corner_label(c0) == label;
-                    // Signed volume of the cone from the origin, with the side's own
-                    // orientation (its normal points into the region it faces).
-                    let [a, b, c] =
-                        [c0, c0.next(), c0.prev()].map(|c| self.position(self.corner_vertex(c)));
-                    shell.volume -= a.dot(b.cross(c)) / 6.0;
-                    shell.area += 0.5 * (b - a).cross(c - a).length();
-                    for c in [c0, c0.next(), c0.prev()] {
-                        match self.opposite(c) {
-                            Some(o) => {
-                                let os = o.side_index();
-                                if side_shell[os] == u32::MAX {
-                                    side_shell[os] = id;
-                                    stack.push(os as u32);
-                                }
-                            }
-                            None => shell.closed = false,
-                        }
-                    }
-                }
-                shells.push(shell);
+                let shell = &mut shells[side_shell[s] as usize];
+                let c0 = CornerId::new((s * 3) as u32);
+                shell.sides += 1;
+                shell.consistent &= self.corner_label(c0) == shell.label;
+                // Signed volume of the cone from the origin, with the side's own
+                // orientation (its normal points into the region it faces).
+                let [a, b, c] =
+                    [c0, c0.next(), c0.prev()].map(|c| self.position(self.corner_vertex(c)));
+                shell.volume -= a.dot(b.cross(c)) / 6.0;
+                shell.area += 0.5 * (b - a).cross(c - a).length();
+                shell.closed &= [c0, c0.next(), c0.prev()]
+                    .iter()
+                    .all(|&c| self.opposite(c).is_some());
             }
         }
         Regions { shells, side_shell }
@@ -221,7 +230,9 @@ mod census_tests {
     use glam::DVec3;
 
     use super::RegionCensus;
+    use crate::corner::Side;
     use crate::generators::{double_bubble, icosphere};
+    use crate::ids::CornerId;
     use crate::ids::Label;
     use crate::mesh::LabeledMesh;
 
@@ -282,5 +293,46 @@ mod census_tests {
             RegionCensus::of(&LabeledMesh::new()).events_since(&one),
             (0, 0)
         );
+    }
+
+    /// Every side lies in one shell, shells are numbered by their lowest side, each holds
+    /// only sides joined to it across edges, and each one's measures are its own sides':
+    /// checked on a double bubble (three shells: outside, and one per bubble).
+    #[test]
+    fn shells_are_the_joined_sides_numbered_by_lowest_side() {
+        use crate::geometry::label_volumes;
+        let m = double_bubble(0.5, 12).unwrap();
+        let r = m.regions();
+        assert_eq!(r.shells.len(), 3);
+        let mut first = vec![usize::MAX; r.shells.len()];
+        let mut sides = vec![0; r.shells.len()];
+        for t in m.triangles() {
+            for side in [Side::Front, Side::Back] {
+                let s = r.shell_of(t, side).unwrap();
+                let c0 = CornerId::of(t, side, 0);
+                for c in [c0, c0.next(), c0.prev()] {
+                    let o = m.opposite(c).unwrap();
+                    assert_eq!(r.side_shell[o.side_index()] as usize, s);
+                }
+                assert_eq!(r.shells[s].label, m.labels(t)[side.index()]);
+                first[s] = first[s].min(t.idx() * 2 + side.index());
+                sides[s] += 1;
+            }
+        }
+        assert!(first.windows(2).all(|w| w[0] < w[1]), "{first:?}");
+        let volumes = label_volumes(&m);
+        for (k, shell) in r.shells.iter().enumerate() {
+            assert_eq!(shell.sides, sides[k]);
+            assert!(shell.consistent && shell.closed);
+            let expected = volumes.get(&shell.label).copied().unwrap_or(0.0);
+            if shell.label == Label::OUTSIDE {
+                assert!(shell.volume < 0.0);
+            } else {
+                assert!(
+                    (shell.volume - expected).abs() < 1e-12,
+                    "{shell:?} vs {expected}"
+                );
+            }
+        }
     }
 }
