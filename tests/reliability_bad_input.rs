@@ -639,6 +639,15 @@ fn bad_proposals_are_refused_by_both_backends_without_touching_the_mesh() {
                 other => panic!("{b}: {bad}: {other:?}"),
             }
         }
+        // Finite, but past the range where the exact predicates are exact.
+        for bad in [1e31, -1e300] {
+            let mut p = good.clone();
+            p[3].z = bad;
+            match t.advance(&p) {
+                Err(TrackError::ProposalOutOfRange { vertex, .. }) => assert_eq!(vertex.idx(), 3),
+                other => panic!("{b}: {bad}: {other:?}"),
+            }
+        }
         assert_eq!(t.mesh().to_raw().1, before.to_raw().1);
         let bits = |m: &LabeledMesh| {
             m.positions()

@@ -267,7 +267,7 @@ pub fn fix(mesh: &LabeledMesh, cell_size: Option<f64>) -> Result<LabeledMesh, Fi
 
 /// Checks what the pipeline needs and cannot repair: topology (closed, no dangling,
 /// degenerate or duplicate triangle, a sound corner table), a front ≠ back label on every
-/// triangle, finite coordinates. Inconsistent wedges and zero-area triangles are defects
+/// triangle, finite coordinates within the supported range. Inconsistent wedges and zero-area triangles are defects
 /// the pass repairs, so they are allowed here. Returns the report of layers 1–3.
 fn check_fix_input(mesh: &LabeledMesh) -> Result<ValidationReport, FixError> {
     let r = validate(mesh, &ValidateOptions::default());
@@ -277,7 +277,8 @@ fn check_fix_input(mesh: &LabeledMesh) -> Result<ValidationReport, FixError> {
         && r.boundary_edges.is_empty()
         && r.corner_table.is_empty()
         && r.same_label_triangles.is_empty()
-        && r.non_finite.is_empty());
+        && r.non_finite.is_empty()
+        && r.out_of_range.is_empty());
     if fatal {
         return Err(FixError::InvalidInput(r.to_string()));
     }
@@ -512,6 +513,7 @@ pub fn fix_with(mesh: &LabeledMesh, options: &FixOptions) -> Result<FixOutcome, 
         && validation.same_label_triangles.is_empty()
         && validation.inconsistent_edges.is_empty()
         && validation.non_finite.is_empty()
+        && validation.out_of_range.is_empty()
         && validation.zero_area.is_empty();
     if !layers_1_to_3_ok {
         return Err(FixError::InvalidOutput(validation.to_string()));

@@ -255,6 +255,17 @@ pub enum TrackError {
         /// The offending position.
         position: [f64; 3],
     },
+    /// A proposed position has a coordinate above [`crate::predicates::MAX_COORDINATE`]
+    /// (2¹⁰⁰) in magnitude, where the exact predicates are no longer exact.
+    #[error(
+        "proposed position of vertex {vertex} is out of the supported range (|coordinate| ≤ 2^100 ≈ 1.3e30): {position:?}"
+    )]
+    ProposalOutOfRange {
+        /// The vertex.
+        vertex: VertexId,
+        /// The offending position.
+        position: [f64; 3],
+    },
     /// The mesh handed to the tracker does not satisfy its preconditions.
     #[error("invalid input mesh: {0}")]
     InvalidInput(String),
@@ -276,8 +287,8 @@ pub enum TrackError {
     },
 }
 
-/// Checks a proposal's length and finiteness against a mesh: the common first stage of
-/// every backend's `advance`.
+/// Checks a proposal's length, finiteness and range against a mesh: the common first
+/// stage of every backend's `advance`.
 pub fn check_proposal(mesh: &LabeledMesh, proposed: &[DVec3]) -> Result<(), TrackError> {
     if proposed.len() != mesh.vertex_capacity() {
         return Err(TrackError::ProposalLength {
@@ -289,6 +300,12 @@ pub fn check_proposal(mesh: &LabeledMesh, proposed: &[DVec3]) -> Result<(), Trac
         let p = proposed[v.idx()];
         if !p.is_finite() {
             return Err(TrackError::NonFiniteProposal {
+                vertex: v,
+                position: p.to_array(),
+            });
+        }
+        if !crate::predicates::within_max_coordinate(p) {
+            return Err(TrackError::ProposalOutOfRange {
                 vertex: v,
                 position: p.to_array(),
             });

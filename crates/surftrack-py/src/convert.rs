@@ -45,6 +45,7 @@ pub fn track_error(e: RustTrackError) -> PyErr {
     match e {
         RustTrackError::ProposalLength { .. }
         | RustTrackError::NonFiniteProposal { .. }
+        | RustTrackError::ProposalOutOfRange { .. }
         | RustTrackError::InvalidInput(_) => PyValueError::new_err(e.to_string()),
         RustTrackError::StageFailed { .. } | RustTrackError::TimeBudgetExceeded { .. } => {
             TrackError::new_err(e.to_string())

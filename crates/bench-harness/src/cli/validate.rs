@@ -25,6 +25,7 @@ struct ValidateRecord {
     zero_area: usize,
     duplicates: usize,
     non_finite: usize,
+    out_of_range: usize,
     corner_table_errors: usize,
     non_manifold_edges: usize,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -108,6 +109,7 @@ pub(super) fn run(args: &ValidateArgs) -> anyhow::Result<ExitCode> {
             zero_area: report.zero_area.count,
             duplicates: report.duplicates.count,
             non_finite: report.non_finite.count,
+            out_of_range: report.out_of_range.count,
             corner_table_errors: report.corner_table.count,
             non_manifold_edges: report.non_manifold_edges,
             self_intersecting_pairs: report.self_intersecting_pairs.as_ref().map(|l| l.count),

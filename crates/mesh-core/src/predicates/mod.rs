@@ -3,7 +3,8 @@
 //!
 //! Every function here returns a decision that is exact for finite `f64` input (products
 //! of coordinate differences must neither overflow nor underflow, as for Shewchuk's
-//! predicates), does not allocate, and does not panic. Floating-point filters make the
+//! predicates; [`range`] gives the coordinate range where that holds, which validation
+//! checks), does not allocate, and does not panic. Floating-point filters make the
 //! common case cheap; the exact path runs only when the filter cannot certify the answer.
 //!
 //! # Sign convention
@@ -42,6 +43,7 @@ pub mod crossing;
 pub mod order;
 pub mod orient;
 mod planar;
+pub mod range;
 pub mod tri_tri;
 
 #[cfg(test)]
@@ -53,6 +55,7 @@ pub use crossing::{
 };
 pub use order::compare_crossings;
 pub use orient::{Axis, Sign, collinear, orient2d, orient2d_axis, orient3d};
+pub use range::{MAX_COORDINATE, MIN_EXTENT, below_min_extent, within_max_coordinate};
 pub use tri_tri::{
     intersect_keyed_triangle_triangle, intersect_segment_triangle, intersect_sharing_edge,
     intersect_sharing_vertex, intersect_triangle_triangle,

@@ -1,19 +1,22 @@
-//! Layer 3, geometry: finite coordinates, and no triangle of zero area.
+//! Layer 3, geometry: finite coordinates within the supported range
+//! ([`crate::predicates::range`]), and no triangle of zero area.
 //!
 //! "Zero area" is decided exactly: a triangle with three distinct vertices is flat when
 //! its three points are collinear, i.e. its normal `(b−a)×(c−a)` is exactly zero, i.e.
 //! the exact [`orient2d_axis`] is zero along all three axes (each is the sign of one
 //! normal component). Triangles with a repeated vertex are layer 1's `degenerate` and
-//! triangles with a non-finite vertex are left to `non_finite`, so each defect is
-//! reported once, in its own category.
+//! triangles with a non-finite or out-of-range vertex are left to `non_finite` and
+//! `out_of_range` (the exact predicates are not exact there), so each defect is reported
+//! once, in its own category.
 
+use glam::DVec3;
 use rayon::prelude::*;
 
 use super::report::{Listed, ValidationReport};
 use super::topology::{CHUNK, EdgeContext};
 use crate::ids::{TriId, VertexId};
 use crate::mesh::LabeledMesh;
-use crate::predicates::collinear;
+use crate::predicates::{below_min_extent, collinear, within_max_coordinate};
 
 /// Runs layer 3.
 pub(super) fn check(
@@ -23,22 +26,29 @@ pub(super) fn check(
     report: &mut ValidationReport,
 ) {
     let positions = mesh.positions();
-    let parts: Vec<Listed<VertexId>> = (0..positions.len())
+    let in_range = coordinate_check(mesh);
+    let parts: Vec<(Listed<VertexId>, Listed<VertexId>)> = (0..positions.len())
         .into_par_iter()
         .chunks(CHUNK)
         .map(|range| {
-            let mut out = Listed::default();
+            let (mut non_finite, mut out_of_range) = (Listed::default(), Listed::default());
             for v in range {
                 let id = VertexId::new(v as u32);
-                if mesh.is_vertex_alive(id) && !positions[v].is_finite() {
-                    out.push(id, cap);
+                if !mesh.is_vertex_alive(id) {
+                    continue;
+                }
+                if !positions[v].is_finite() {
+                    non_finite.push(id, cap);
+                } else if !in_range(positions[v]) {
+                    out_of_range.push(id, cap);
                 }
             }
-            out
+            (non_finite, out_of_range)
         })
         .collect();
-    for p in parts {
-        report.non_finite.append(p, cap);
+    for (non_finite, out_of_range) in parts {
+        report.non_finite.append(non_finite, cap);
+        report.out_of_range.append(out_of_range, cap);
     }
 
     let tris = mesh.tris();
@@ -48,8 +58,12 @@ pub(super) fn check(
         .map(|range| {
             let mut out = Listed::default();
             for t in range {
-                if ctx.usable[t] && is_zero_area(mesh, TriId::new(t as u32)) {
-                    out.push(TriId::new(t as u32), cap);
+                let t = TriId::new(t as u32);
+                if ctx.usable[t.idx()]
+                    && mesh.tri_positions(t).into_iter().all(&in_range)
+                    && is_zero_area(mesh, t)
+                {
+                    out.push(t, cap);
                 }
             }
             out
@@ -72,4 +86,20 @@ pub(super) fn is_zero_area(mesh: &LabeledMesh, t: TriId) -> bool {
         return false;
     }
     collinear(p, q, r)
+}
+
+/// The test of one finite position against the supported range
+/// ([`crate::predicates::range`]): at most the largest coordinate, and, for the whole mesh,
+/// its largest live coordinate magnitude not below the smallest extent (when it is, every
+/// position fails). Non-finite positions fail too.
+pub(super) fn coordinate_check(mesh: &LabeledMesh) -> impl Fn(DVec3) -> bool + Sync {
+    let positions = mesh.positions();
+    let extent = (0..positions.len())
+        .into_par_iter()
+        .with_min_len(CHUNK)
+        .filter(|&v| mesh.is_vertex_alive(VertexId::new(v as u32)) && positions[v].is_finite())
+        .map(|v| positions[v].abs().max_element())
+        .reduce(|| 0.0, f64::max);
+    let tiny = below_min_extent(extent);
+    move |p| !tiny && within_max_coordinate(p)
 }

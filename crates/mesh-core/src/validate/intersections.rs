@@ -21,6 +21,8 @@
 //! [`intersect_sharing_vertex`]: crate::predicates::intersect_sharing_vertex
 //! [`intersect_sharing_edge`]: crate::predicates::intersect_sharing_edge
 
+use glam::DVec3;
+
 use super::report::Listed;
 use super::topology::{EdgeContext, is_degenerate};
 use crate::broadphase::{Aabb, Bvh};
@@ -53,14 +55,20 @@ impl Found {
 }
 
 /// The broad-phase box of triangle slot `t`: EMPTY (overlapping nothing) unless `usable`
-/// (then its vertex ids are safe to look up) and every coordinate is finite, so that the
-/// slot's id is its item id in the BVH.
-fn checkable_box(mesh: &LabeledMesh, t: u32, usable: bool) -> Aabb {
+/// (then its vertex ids are safe to look up) and every corner passes `in_range` (finite
+/// and within the range where the predicates are exact, [`super::geometry::coordinate_check`]),
+/// so that the slot's id is its item id in the BVH.
+fn checkable_box(
+    mesh: &LabeledMesh,
+    t: u32,
+    usable: bool,
+    in_range: impl Fn(DVec3) -> bool,
+) -> Aabb {
     if !usable {
         return Aabb::EMPTY;
     }
     let p = mesh.tri_positions(TriId::new(t));
-    if p.iter().all(|q| q.is_finite()) {
+    if p.into_iter().all(in_range) {
         Aabb::from_points(&p)
     } else {
         Aabb::EMPTY
@@ -73,11 +81,13 @@ pub(super) fn check(mesh: &LabeledMesh, ctx: &EdgeContext, cap: usize) -> Listed
     // One box per triangle slot, EMPTY (overlapping nothing) for those not checked, so
     // the item id is the triangle id.
     // `usable` first: only then are the vertex ids safe to look up.
+    let in_range = super::geometry::coordinate_check(mesh);
     let box_of = |t: u32| {
         checkable_box(
             mesh,
             t,
             ctx.usable[t as usize] && !is_degenerate(tris[t as usize]),
+            &in_range,
         )
     };
     // Triangle slots fit in u32 (the mesh caps them), so the build cannot fail.
@@ -120,17 +130,19 @@ pub(super) fn check(mesh: &LabeledMesh, ctx: &EdgeContext, cap: usize) -> Listed
 /// the count and list of every pair, and on a mesh that is not clean — the usual input of
 /// a repair — the first pair is found long before the last: once one is found, every task
 /// skips its remaining exact tests.
-/// Triangles that layers 1–3 would reject (dead, dangling, degenerate, non-finite) are
+/// Triangles that layers 1–3 would reject (dead, dangling, degenerate, non-finite or out of
+/// range) are
 /// left out, so any mesh is safe to ask. The answer does not depend on the thread count.
 pub fn any_intersection(mesh: &LabeledMesh) -> bool {
     use std::sync::atomic::{AtomicBool, Ordering};
     let tris = mesh.tris();
+    let in_range = super::geometry::coordinate_check(mesh);
     let box_of = |t: u32| {
         let tri = tris[t as usize];
         let usable = mesh.is_triangle_alive(TriId::new(t))
             && tri.iter().all(|&v| mesh.is_vertex_alive(v))
             && !is_degenerate(tri);
-        checkable_box(mesh, t, usable)
+        checkable_box(mesh, t, usable, &in_range)
     };
     let Ok(bvh) = Bvh::build_from_fn(tris.len(), box_of) else {
         return false;

@@ -177,6 +177,10 @@ pub struct ValidationReport {
     pub inconsistent_edges: Listed<InconsistentEdge>,
     /// Layer 3: live vertices with a NaN or infinite coordinate.
     pub non_finite: Listed<VertexId>,
+    /// Layer 3: live vertices with a coordinate outside the supported range
+    /// ([`crate::predicates::range`]): above 2¹⁰⁰ in magnitude, or every vertex of a mesh
+    /// smaller than 2⁻¹⁰⁰.
+    pub out_of_range: Listed<VertexId>,
     /// Layer 3: triangles with three distinct vertices at exactly collinear positions.
     pub zero_area: Listed<TriId>,
     /// Layer 4: surface components whose outside is labelled with another material than
@@ -201,6 +205,7 @@ impl ValidationReport {
             && self.same_label_triangles.is_empty()
             && self.inconsistent_edges.is_empty()
             && self.non_finite.is_empty()
+            && self.out_of_range.is_empty()
             && self.zero_area.is_empty()
             && self.misplaced_shells.as_ref().is_none_or(Listed::is_empty)
             && self
@@ -285,6 +290,12 @@ impl fmt::Display for ValidationReport {
         category(f, "non-finite vertices", &self.non_finite, |v| {
             v.to_string()
         })?;
+        category(
+            f,
+            "vertices out of range (|coordinate| ≤ 2^100 ≈ 1.3e30, mesh not smaller than 2^-100 ≈ 7.9e-31; rescale the mesh)",
+            &self.out_of_range,
+            |v| v.to_string(),
+        )?;
         category(f, "zero-area triangles", &self.zero_area, |t| t.to_string())?;
         if let Some(shells) = &self.misplaced_shells {
             category(f, "misplaced shells", shells, |m| m.to_string())?;

@@ -147,6 +147,40 @@ fn non_finite_positions_are_reported_without_panicking() {
 }
 
 #[test]
+fn coordinates_outside_the_predicates_range_are_named_not_taken_for_other_defects() {
+    // Near 1e300 the products overflow: before the range check this tetrahedron was
+    // "valid" with NaN volumes, and the trackers refused it for an infinite cell size.
+    let (mut p, tris, labels) = tetra(DVec3::ZERO, 1);
+    p[1] = DVec3::new(1e300, 0.0, 0.0);
+    p[2] = DVec3::new(0.0, 2e30, 0.0);
+    let r = validate(&build((p, tris.clone(), labels.clone())), &full());
+    assert_eq!(r.out_of_range.items, vec![v(1), v(2)]);
+    assert!(r.non_finite.is_empty() && r.zero_area.is_empty());
+    assert_eq!(r.self_intersecting_pairs.as_ref().map(|l| l.count), Some(0));
+    assert!(!r.is_valid());
+    assert!(r.to_string().contains("2 vertices out of range"), "{r}");
+
+    // Near 1e-300 they underflow: the same tetrahedron scaled down had four "zero-area"
+    // triangles. The whole mesh is too small, so every vertex is named.
+    let (p, tris, labels) = tetra(DVec3::ZERO, 1);
+    let tiny: Vec<DVec3> = p.iter().map(|&q| q * 1e-300).collect();
+    let r = validate(&build((tiny, tris.clone(), labels.clone())), &full());
+    assert_eq!(r.out_of_range.items, vec![v(0), v(1), v(2), v(3)]);
+    assert!(r.zero_area.is_empty());
+    assert!(!r.is_valid());
+
+    // At the bounds, and with float32 export noise near zero in a mesh of unit size: valid.
+    for scale in [crate::predicates::MAX_COORDINATE, 1.5 * crate::predicates::MIN_EXTENT] {
+        let q: Vec<DVec3> = p.iter().map(|&x| x * scale).collect();
+        let r = validate(&build((q, tris.clone(), labels.clone())), &full());
+        assert!(r.is_valid(), "scale {scale:e}: {r}");
+    }
+    let mut q = p.clone();
+    q[0] = DVec3::new(1e-45, -1e-45, 0.0);
+    assert!(validate(&build((q, tris, labels)), &full()).is_valid());
+}
+
+#[test]
 fn exactly_collinear_triangle_is_zero_area() {
     let (mut p, mut tris, mut labels) = tetra(DVec3::ZERO, 1);
     p.push(DVec3::new(0.5, 0.0, 0.0)); // v4 on edge v0–v1
