@@ -335,8 +335,37 @@ impl StaticIntersectionGuard {
     }
 }
 
+/// Whether `edit` leaves a subset of the current geometry: it moves and creates no
+/// vertex, and every triangle it adds has the corners of one it removes (degenerate
+/// removal: a coincident pair kept as one triangle with the two outer labels). Every
+/// pair of triangles of its end state is then a pair of the current state at the same
+/// positions, so on a mesh this guard has kept intersection-free it creates no
+/// intersection, and the exact tests are skipped. Measured on the collision backend's
+/// merge (300 spheres packing), about 2000 such edits per round, each testing its
+/// triangle against a dense wall neighbourhood.
+fn reuses_existing_triangles(mesh: &LabeledMesh, edit: &Edit) -> bool {
+    let sorted = |mut c: [VertexId; 3]| {
+        c.sort_unstable();
+        c
+    };
+    edit.moves.is_empty()
+        && edit.new_vertices.is_empty()
+        && edit.add_tris.iter().all(|(verts, _)| {
+            let [VertexRef::Old(a), VertexRef::Old(b), VertexRef::Old(c)] = *verts else {
+                return false;
+            };
+            let corners = sorted([a, b, c]);
+            edit.remove_tris
+                .iter()
+                .any(|&t| sorted(mesh.tri(t)) == corners)
+        })
+}
+
 impl EditGuard for StaticIntersectionGuard {
     fn check(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), Veto> {
+        if reuses_existing_triangles(mesh, edit) {
+            return Ok(());
+        }
         self.index.refresh(mesh);
         self.next_epoch(mesh);
         // The edit's own removed and moved triangles are never candidates.
@@ -614,6 +643,57 @@ mod tests {
             }
             r => panic!("{r:?}"),
         }
+    }
+
+    /// An edit that re-adds a triangle's own corners (degenerate removal's relabelling)
+    /// is passed without exact tests, even where that triangle already crosses another
+    /// (it adds no geometry); change a corner, or move one, and it is checked again.
+    #[test]
+    fn re_adding_a_triangles_own_corners_is_passed_and_nothing_else_is() {
+        // Two overlapping spheres: some triangles of the first cross the second.
+        let (mut p, mut tris, mut labels) = sphere().to_raw();
+        let n = p.len() as u32;
+        let (q, qt, ql) = sphere().to_raw();
+        p.extend(q.iter().map(|&x| x + DVec3::new(0.5, 0.0, 0.0)));
+        tris.extend(qt.iter().map(|t| t.map(|v| v + n)));
+        labels.extend(ql.iter().map(|_| [0, 2]));
+        let mesh = LabeledMesh::from_raw(p, &tris, &labels).unwrap();
+        let mut guard = StaticIntersectionGuard::new();
+        let m = qt.len() as u32;
+        let crossing = (0..m)
+            .map(TriId::new)
+            .find(|&t| {
+                (m..2 * m).any(|u| crate::validate::triangles_intersect(&mesh, t, TriId::new(u)))
+            })
+            .expect("a triangle of the first sphere crossing the second");
+        let [a, b, c] = mesh.tri(crossing);
+        let readd = |corners: [VertexId; 3]| Edit {
+            remove_tris: vec![crossing],
+            add_tris: vec![(corners.map(VertexRef::Old), [Label::new(3), Label::new(1)])],
+            ..Edit::default()
+        };
+        assert_eq!(guard.check(&mesh, &readd([b, c, a])), Ok(()));
+        // The same edit but with a corner moved is an ordinary edit: checked, and vetoed.
+        let mut moved = readd([b, c, a]);
+        moved.moves.push(VertexMove {
+            vertex: a,
+            end: mesh.position(a) * 1.0001,
+            blend: None,
+        });
+        assert!(matches!(
+            guard.check(&mesh, &moved),
+            Err(Veto::EndStateIntersects { .. })
+        ));
+        // Another corner: new geometry, checked (a chord through the sphere crosses it).
+        let far = mesh
+            .vertices()
+            .filter(|v| v.raw() < n)
+            .max_by(|&x, &y| {
+                let d = |v: VertexId| mesh.position(v).distance(mesh.position(a));
+                d(x).total_cmp(&d(y))
+            })
+            .unwrap();
+        assert!(guard.check(&mesh, &readd([a, b, far])).is_err());
     }
 
     /// After many committed edits (the dirty list, then a rebuild), the guard still agrees

@@ -170,7 +170,10 @@ fn coordinates_outside_the_predicates_range_are_named_not_taken_for_other_defect
     assert!(!r.is_valid());
 
     // At the bounds, and with float32 export noise near zero in a mesh of unit size: valid.
-    for scale in [crate::predicates::MAX_COORDINATE, 1.5 * crate::predicates::MIN_EXTENT] {
+    for scale in [
+        crate::predicates::MAX_COORDINATE,
+        1.5 * crate::predicates::MIN_EXTENT,
+    ] {
         let q: Vec<DVec3> = p.iter().map(|&x| x * scale).collect();
         let r = validate(&build((q, tris.clone(), labels.clone())), &full());
         assert!(r.is_valid(), "scale {scale:e}: {r}");
