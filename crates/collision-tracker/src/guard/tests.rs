@@ -81,7 +81,7 @@ fn smoothing_move_through_a_small_sphere_is_vetoed() {
 }
 
 #[test]
-fn smoothing_move_through_a_sheet_is_vetoed_by_the_end_state() {
+fn smoothing_move_through_a_sheet_is_vetoed() {
     let a = sphere(2, DVec3::ZERO, 1.0, [0, 1]);
     let v = top(&a);
     let p = a.position(v);

@@ -281,6 +281,12 @@ impl StaticIntersectionGuard {
         self.index.reset();
     }
 
+    /// Brings the triangle index up to date, as a check does first: for a caller that
+    /// skips the check but queries the index.
+    pub fn refresh_index(&mut self, mesh: &LabeledMesh) {
+        self.index.refresh(mesh);
+    }
+
     /// The guard's triangle index, current after the last check and every commit since:
     /// the collision guard sweeps against it instead of keeping an index of its own.
     pub fn index(&self) -> &TriangleIndex {
@@ -363,10 +369,12 @@ fn reuses_existing_triangles(mesh: &LabeledMesh, edit: &Edit) -> bool {
 
 impl EditGuard for StaticIntersectionGuard {
     fn check(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), Veto> {
+        // The index first even when the answer is known: the collision guard sweeps
+        // against it after this check.
+        self.index.refresh(mesh);
         if reuses_existing_triangles(mesh, edit) {
             return Ok(());
         }
-        self.index.refresh(mesh);
         self.next_epoch(mesh);
         // The edit's own removed and moved triangles are never candidates.
         for &t in &edit.remove_tris {
