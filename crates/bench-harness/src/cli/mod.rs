@@ -615,8 +615,9 @@ pub struct ConvertArgs {
 
 /// Reads a mesh a command is about to work on (`fix`, `run --mesh`, `generate --mesh`,
 /// `bench scaling --mesh`): vertices repeated at the same position on open edges are
-/// stitched ([`mesh_core::io::ReadOptions::stitch`]: the per-face vertices of STL-style
-/// exports), and stderr says how many. `validate` and `convert` read files as they are.
+/// stitched and open edges split at the vertices lying on them
+/// ([`mesh_core::io::ReadOptions::stitch`]: the per-face vertices of STL-style exports,
+/// the T-junctions of CAD exports), and stderr says how many. `validate` and `convert` read files as they are.
 fn read_work_mesh(
     path: &std::path::Path,
 ) -> Result<mesh_core::LabeledMesh, mesh_core::io::IoError> {
@@ -631,6 +632,14 @@ fn read_work_mesh(
              (per-face vertices, as STL-style exporters write them)",
             path.display(),
             report.stitched_vertices
+        );
+    }
+    if report.t_junction_vertices > 0 {
+        eprintln!(
+            "{}: split open edges at {} vertices lying exactly on them (T-junctions, as CAD \
+             exporters leave them)",
+            path.display(),
+            report.t_junction_vertices
         );
     }
     Ok(mesh)

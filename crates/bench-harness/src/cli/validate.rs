@@ -5,7 +5,7 @@ use std::path::Path;
 use std::process::ExitCode;
 
 use mesh_core::geometry::label_volumes;
-use mesh_core::io::{ReadOptions, read_mesh_reported};
+use mesh_core::io::{ReadOptions, ReadReport, read_mesh_reported};
 use mesh_core::validate::{ValidateOptions, validate};
 use serde::Serialize;
 
@@ -33,28 +33,44 @@ struct ValidateRecord {
     volumes: BTreeMap<String, f64>,
     /// Vertices `fix` and `run --mesh` would stitch (repeated positions on open edges).
     stitchable_vertices: usize,
+    /// Vertices they would insert into open edges that run past them (T-junctions).
+    t_junction_vertices: usize,
     valid: bool,
     report: mesh_core::validate::ValidationReport,
 }
 
-/// How many vertices the working commands would stitch in `path` (0 if none, or if it
+/// What the working commands' stitching would change in `path` (nothing if the file
 /// does not read even so): validation reports the file as written, this says whether a
-/// broken-looking file is only a triangle soup.
-fn stitchable_vertices(path: &Path) -> usize {
+/// broken-looking file is only a triangle soup or has T-junctions.
+fn stitchable(path: &Path) -> ReadReport {
     let stitch = ReadOptions {
         stitch: true,
         ..ReadOptions::default()
     };
-    read_mesh_reported(path, &stitch).map_or(0, |(_, report)| report.stitched_vertices)
+    read_mesh_reported(path, &stitch).map_or(ReadReport::default(), |(_, report)| report)
 }
 
 /// The hint shown under an invalid or unreadable file that stitching would change.
-fn stitch_hint(stitchable: usize) -> Option<String> {
-    (stitchable > 0).then(|| {
+fn stitch_hint(stitchable: &ReadReport) -> Option<String> {
+    let mut found = Vec::new();
+    if stitchable.stitched_vertices > 0 {
+        found.push(format!(
+            "{} vertices repeat another one's position on an open edge (per-face vertices, \
+             as STL-style exporters write them)",
+            stitchable.stitched_vertices
+        ));
+    }
+    if stitchable.t_junction_vertices > 0 {
+        found.push(format!(
+            "{} vertices lie on an open edge that runs past them (T-junctions, as CAD \
+             exporters leave them)",
+            stitchable.t_junction_vertices
+        ));
+    }
+    (!found.is_empty()).then(|| {
         format!(
-            "hint: {stitchable} vertices repeat another one's position on an open edge \
-             (per-face vertices, as STL-style exporters write them); `surftrack fix` and \
-             `run --mesh` stitch them"
+            "hint: {}; `surftrack fix` and `run --mesh` stitch them",
+            found.join("; ")
         )
     })
 }
@@ -63,18 +79,19 @@ pub(super) fn run(args: &ValidateArgs) -> anyhow::Result<ExitCode> {
     let mesh = match mesh_core::io::read_mesh(&args.file) {
         Ok(mesh) => mesh,
         Err(err) => {
-            let stitchable = stitchable_vertices(&args.file);
+            let stitchable = stitchable(&args.file);
             if args.json {
                 let record = serde_json::json!({
                     "file": args.file.display().to_string(),
                     "error": err.to_string(),
-                    "stitchable_vertices": stitchable,
+                    "stitchable_vertices": stitchable.stitched_vertices,
+                    "t_junction_vertices": stitchable.t_junction_vertices,
                     "valid": false,
                 });
                 println!("{record}");
             } else {
                 eprintln!("error: {err}");
-                if let Some(hint) = stitch_hint(stitchable) {
+                if let Some(hint) = stitch_hint(&stitchable) {
                     eprintln!("{hint}");
                 }
             }
@@ -88,9 +105,9 @@ pub(super) fn run(args: &ValidateArgs) -> anyhow::Result<ExitCode> {
     let report = validate(&mesh, &options);
     let valid = report.is_valid();
     let stitchable = if report.boundary_edges.count > 0 {
-        stitchable_vertices(&args.file)
+        stitchable(&args.file)
     } else {
-        0
+        ReadReport::default()
     };
     let volumes = label_volumes(&mesh)
         .into_iter()
@@ -114,7 +131,8 @@ pub(super) fn run(args: &ValidateArgs) -> anyhow::Result<ExitCode> {
             non_manifold_edges: report.non_manifold_edges,
             self_intersecting_pairs: report.self_intersecting_pairs.as_ref().map(|l| l.count),
             volumes,
-            stitchable_vertices: stitchable,
+            stitchable_vertices: stitchable.stitched_vertices,
+            t_junction_vertices: stitchable.t_junction_vertices,
             valid,
             report,
         };
@@ -125,7 +143,7 @@ pub(super) fn run(args: &ValidateArgs) -> anyhow::Result<ExitCode> {
             println!("  volume of label {label}: {volume:.9}");
         }
         println!("{}", if valid { "valid" } else { "INVALID" });
-        if let Some(hint) = stitch_hint(stitchable) {
+        if let Some(hint) = stitch_hint(&stitchable) {
             println!("{hint}");
         }
     }

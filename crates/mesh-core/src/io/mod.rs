@@ -113,7 +113,8 @@ pub struct ReadOptions {
     pub unlabeled: Unlabeled,
     /// Merge vertices at exactly the same position that lie on open edges (files that
     /// give every triangle its own vertices, as STL-style exporters do), before labels
-    /// are settled; a closed mesh is never changed. Off by default, so that a reader
+    /// are settled, then split open edges at the open vertices lying exactly on them
+    /// (T-junctions, as CAD exporters leave them); a closed mesh is never changed. Off by default, so that a reader
     /// returns what the file says; the command line's repair and run commands turn it
     /// on. [`read_mesh_reported`] says how many vertices were merged.
     pub stitch: bool,
@@ -124,6 +125,9 @@ pub struct ReadOptions {
 pub struct ReadReport {
     /// Vertices merged into a coincident one on an open edge ([`ReadOptions::stitch`]).
     pub stitched_vertices: usize,
+    /// Vertices inserted into open edges that ran past them (T-junctions, closed by
+    /// splitting the edge's triangle; [`ReadOptions::stitch`]).
+    pub t_junction_vertices: usize,
 }
 
 /// The file formats, chosen by extension.
@@ -211,10 +215,20 @@ impl RawMesh {
         mut self,
         options: &ReadOptions,
     ) -> Result<(LabeledMesh, ReadReport), IoErrorKind> {
-        let stitched_vertices = if options.stitch {
-            stitch::stitch_open_vertices(&mut self.positions, &mut self.tris)
+        let (stitched_vertices, t_junction_vertices) = if options.stitch {
+            match stitch::stitch_open_vertices(&mut self.positions, &mut self.tris) {
+                None => (0, 0),
+                Some(stitched) => (
+                    stitched,
+                    stitch::split_t_junctions(
+                        &self.positions,
+                        &mut self.tris,
+                        self.labels.as_mut(),
+                    ),
+                ),
+            }
         } else {
-            0
+            (0, 0)
         };
         let check_closed =
             self.labels.is_none() && options.unlabeled == Unlabeled::ClosedTwoMaterial;
@@ -228,7 +242,13 @@ impl RawMesh {
         if check_closed {
             unlabeled::label_closed_components(&mut mesh)?;
         }
-        Ok((mesh, ReadReport { stitched_vertices }))
+        Ok((
+            mesh,
+            ReadReport {
+                stitched_vertices,
+                t_junction_vertices,
+            },
+        ))
     }
 }
 
@@ -406,5 +426,64 @@ element face 4\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0
         assert_eq!(labels, vec![[0, 1]; 4]);
         assert_eq!(tris, vec![[0, 1, 2], [0, 2, 3], [2, 1, 3], [0, 3, 1]]);
         assert!(crate::validate::validate(&mesh, &Default::default()).is_valid());
+    }
+
+    #[test]
+    fn stitching_closes_a_t_junction_of_a_labelled_cad_style_file() {
+        // The unit cube whose front face is a fan through the midpoint of its top edge,
+        // which the top face's edge runs past (each face meshed on its own), labelled
+        // PLY: the split triangle keeps its labels.
+        let p = "0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n0.5 0 1\n";
+        let faces = [
+            [0, 2, 1],
+            [0, 3, 2],
+            [4, 5, 6],
+            [4, 6, 7],
+            [1, 2, 6],
+            [1, 6, 5],
+            [0, 7, 3],
+            [0, 4, 7],
+            [3, 7, 6],
+            [3, 6, 2],
+            [0, 1, 8],
+            [1, 5, 8],
+            [8, 4, 0],
+        ];
+        let mut ply = format!(
+            "ply\nformat ascii 1.0\nelement vertex 9\nproperty double x\nproperty double y\n\
+             property double z\nelement face {}\nproperty list uchar int vertex_indices\n\
+             property int label_front\nproperty int label_back\nend_header\n{p}",
+            faces.len()
+        );
+        for f in faces {
+            ply += &format!("3 {} {} {} 0 2\n", f[0], f[1], f[2]);
+        }
+        let dir = tmp();
+        let path = dir.path().join("tj.ply");
+        std::fs::write(&path, &ply).unwrap();
+        let as_written = read_mesh(&path).unwrap();
+        assert_eq!(
+            crate::validate::validate(&as_written, &Default::default())
+                .boundary_edges
+                .count,
+            3
+        );
+        let stitch = ReadOptions {
+            stitch: true,
+            ..ReadOptions::default()
+        };
+        let (mesh, report) = read_mesh_reported(&path, &stitch).unwrap();
+        assert_eq!(
+            (report.stitched_vertices, report.t_junction_vertices),
+            (0, 1)
+        );
+        assert_eq!(mesh.num_triangles(), 14);
+        assert!(
+            mesh.triangles()
+                .all(|t| mesh.labels(t) == [crate::Label::OUTSIDE, crate::Label::new(2)])
+        );
+        assert!(crate::validate::validate(&mesh, &Default::default()).is_valid());
+        let volume = crate::geometry::label_volumes(&mesh)[&crate::Label::new(2)];
+        assert!((volume - 1.0).abs() < 1e-12, "{volume}");
     }
 }

@@ -16,15 +16,25 @@
 //! Each group of coincident open vertices keeps its first vertex (in file order); the
 //! others are removed and the vertices after them renumbered down, so the result has no
 //! vertex the stitch orphaned. Cost: two sorts, O(T log T).
+//!
+//! After stitching, [`split_t_junctions`] closes what exporters of CAD models leave open
+//! in another way: an edge running past vertices of its neighbours (see there).
 
 use glam::DVec3;
 
+use crate::broadphase::{Aabb, Bvh};
+use crate::predicates::collinear;
+
 /// Stitches `tris` over `positions` in place (see the module docs) and returns the
-/// number of vertices merged into another.
-pub(crate) fn stitch_open_vertices(positions: &mut Vec<DVec3>, tris: &mut [[u32; 3]]) -> usize {
+/// number of vertices merged into another, or `None` when no edge is open (then neither
+/// this nor [`split_t_junctions`] has anything to do: a closed mesh costs one sort).
+pub(crate) fn stitch_open_vertices(
+    positions: &mut Vec<DVec3>,
+    tris: &mut [[u32; 3]],
+) -> Option<usize> {
     let n = positions.len();
     if tris.iter().flatten().any(|&v| v as usize >= n) {
-        return 0; // the mesh builder names the bad index, with the file's numbering
+        return None; // the mesh builder names the bad index, with the file's numbering
     }
     // Open edges: unordered pairs used by exactly one triangle.
     let mut edges: Vec<u64> = tris
@@ -44,7 +54,7 @@ pub(crate) fn stitch_open_vertices(positions: &mut Vec<DVec3>, tris: &mut [[u32;
     }
     drop(edges);
     if !any_open {
-        return 0;
+        return None;
     }
 
     // Group open vertices by exact position; the first of each group represents it.
@@ -63,7 +73,7 @@ pub(crate) fn stitch_open_vertices(positions: &mut Vec<DVec3>, tris: &mut [[u32;
         }
     }
     if merged == 0 {
-        return 0;
+        return Some(0);
     }
 
     // Renumber: every kept vertex moves down by the number of merged ones before it.
@@ -82,7 +92,124 @@ pub(crate) fn stitch_open_vertices(positions: &mut Vec<DVec3>, tris: &mut [[u32;
             *v = new_index[target[*v as usize] as usize];
         }
     }
-    merged
+    Some(merged)
+}
+
+/// Splits open edges at the open vertices that lie exactly on them (T-junctions) and
+/// returns how many vertices were inserted into edges.
+///
+/// Why: CAD exporters mesh each face on its own, so where a coarse face meets a finely
+/// split neighbour along a shared boundary curve, the coarse face's edge runs past the
+/// neighbour's vertices. The surface is closed, but as written the long edge and the
+/// short ones are each used once, and nothing downstream can tell inside from outside.
+///
+/// What is split, and why only that: an **open** edge (used by one triangle), at a
+/// vertex that is itself on an open edge and lies **exactly** on the segment, strictly
+/// between its ends (exact collinearity, [`crate::predicates::collinear`]). The triangle
+/// `(a, b, c)` becomes the fan `(a, v₁, c), (v₁, v₂, c), …, (v_k, b, c)` with its labels:
+/// the same surface, the same orientation. A closed mesh is never changed, and neither
+/// is an exactly flat triangle. A triangle with T-vertices on several of its edges is
+/// split one edge per pass; three passes reach every edge of every triangle.
+pub(crate) fn split_t_junctions(
+    positions: &[DVec3],
+    tris: &mut Vec<[u32; 3]>,
+    labels: Option<&mut Vec<[u32; 2]>>,
+) -> usize {
+    let n = positions.len();
+    if tris.iter().flatten().any(|&v| v as usize >= n) {
+        return 0; // the mesh builder names the bad index
+    }
+    let mut labels = labels;
+    let mut inserted = 0;
+    for _pass in 0..3 {
+        let open = open_edges(tris);
+        if open.is_empty() {
+            break;
+        }
+        let mut on_open: Vec<u32> = open.iter().flat_map(|e| [e.0, e.1]).collect();
+        on_open.sort_unstable();
+        on_open.dedup();
+        let boxes: Vec<Aabb> = on_open
+            .iter()
+            .map(|&v| Aabb::new(positions[v as usize], positions[v as usize]))
+            .collect();
+        let Ok(bvh) = Bvh::build(&boxes) else {
+            break;
+        };
+        // Per triangle, the first of its open edges that has T-vertices, with them in
+        // order from the edge's first corner (in the triangle's orientation).
+        let mut splits: Vec<(usize, usize, Vec<u32>)> = Vec::new();
+        let mut done = vec![false; tris.len()];
+        for &(lo, hi, t) in &open {
+            if done[t] {
+                continue;
+            }
+            let tri = tris[t];
+            let Some(k) = (0..3).find(|&k| {
+                let (a, b) = (tri[k], tri[(k + 1) % 3]);
+                (a.min(b), a.max(b)) == (lo, hi)
+            }) else {
+                continue;
+            };
+            let (a, b, c) = (tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]);
+            let [pa, pb, pc] = [a, b, c].map(|v| positions[v as usize]);
+            if collinear(pa, pb, pc) {
+                continue;
+            }
+            // The axis along which the segment is longest orders points on it.
+            let axis = (pb - pa).abs().max_position();
+            let mut on: Vec<(f64, u32)> = Vec::new();
+            bvh.query(&Aabb::from_points(&[pa, pb]), 0.0, |i| {
+                let v = on_open[i as usize];
+                let p = positions[v as usize];
+                let (x, xa, xb) = (p[axis], pa[axis], pb[axis]);
+                if v != a && v != b && x > xa.min(xb) && x < xa.max(xb) && collinear(pa, pb, p) {
+                    on.push(((x - xa).abs(), v));
+                }
+            });
+            if on.is_empty() {
+                continue;
+            }
+            on.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+            on.dedup_by_key(|x| x.1);
+            done[t] = true;
+            splits.push((t, k, on.into_iter().map(|x| x.1).collect()));
+        }
+        if splits.is_empty() {
+            break;
+        }
+        for (t, k, on) in splits {
+            let tri = tris[t];
+            let (a, b, c) = (tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]);
+            inserted += on.len();
+            let chain: Vec<u32> = std::iter::once(a).chain(on).chain([b]).collect();
+            let label = labels.as_ref().map(|l| l[t]);
+            tris[t] = [chain[0], chain[1], c];
+            for w in chain[1..].windows(2) {
+                tris.push([w[0], w[1], c]);
+                if let (Some(l), Some(label)) = (labels.as_deref_mut(), label) {
+                    l.push(label);
+                }
+            }
+        }
+    }
+    inserted
+}
+
+/// Edges used by exactly one triangle: `(lower vertex, higher vertex, triangle)`, sorted.
+fn open_edges(tris: &[[u32; 3]]) -> Vec<(u32, u32, usize)> {
+    let mut edges: Vec<(u32, u32, usize)> = tris
+        .iter()
+        .enumerate()
+        .flat_map(|(t, tri)| (0..3).map(move |k| (tri[k], tri[(k + 1) % 3], t)))
+        .map(|(a, b, t)| (a.min(b), a.max(b), t))
+        .collect();
+    edges.sort_unstable();
+    edges
+        .chunk_by(|x, y| (x.0, x.1) == (y.0, y.1))
+        .filter(|run| run.len() == 1)
+        .map(|run| run[0])
+        .collect()
 }
 
 #[cfg(test)]
@@ -114,7 +241,10 @@ mod tests {
     #[test]
     fn a_triangle_soup_becomes_the_welded_cube() {
         let (mut positions, mut tris) = soup();
-        assert_eq!(stitch_open_vertices(&mut positions, &mut tris), 36 - 8);
+        assert_eq!(
+            stitch_open_vertices(&mut positions, &mut tris),
+            Some(36 - 8)
+        );
         assert_eq!(positions.len(), 8);
         // Same triangles as the welded cube, corner for corner, by position.
         let (p, t) = cube();
@@ -141,14 +271,78 @@ mod tests {
         positions.extend(p2.iter().map(|&p| p + DVec3::ONE));
         tris.extend(t2.iter().map(|t| t.map(|v| v + 8)));
         let before = (positions.clone(), tris.clone());
-        assert_eq!(stitch_open_vertices(&mut positions, &mut tris), 0);
+        assert_eq!(stitch_open_vertices(&mut positions, &mut tris), None);
         assert_eq!((positions, tris), before);
 
         // A soup with one corner moved by one ulp keeps that corner's copy apart.
         let (mut positions, mut tris) = soup();
         positions[0].x = f64::from_bits(positions[0].x.to_bits() + 1);
-        assert_eq!(stitch_open_vertices(&mut positions, &mut tris), 36 - 8 - 1);
+        assert_eq!(
+            stitch_open_vertices(&mut positions, &mut tris),
+            Some(36 - 8 - 1)
+        );
         assert_eq!(positions.len(), 9);
+    }
+
+    /// The unit cube with its front face (y = 0) meshed as a fan through the midpoint
+    /// of its top edge, which the top face's triangle runs past: a T-junction.
+    fn cube_with_t_junction() -> (Vec<DVec3>, Vec<[u32; 3]>) {
+        let (mut p, t) = cube();
+        let m = p.len() as u32;
+        p.push(DVec3::new(0.5, 0.0, 1.0));
+        let corner =
+            |x: f64, z: f64| p.iter().position(|&q| q == DVec3::new(x, 0.0, z)).unwrap() as u32;
+        let [c00, c10, c11, c01] = [
+            corner(0., 0.),
+            corner(1., 0.),
+            corner(1., 1.),
+            corner(0., 1.),
+        ];
+        let mut tris: Vec<[u32; 3]> = t
+            .into_iter()
+            .filter(|tri| !tri.iter().all(|&v| p[v as usize].y == 0.0))
+            .collect();
+        // Outward is −y: counter-clockwise seen from −y.
+        for tri in [[c00, c10, m], [c10, c11, m], [m, c01, c00]] {
+            let [a, b, c] = tri.map(|v| p[v as usize]);
+            let outward = (b - a).cross(c - a).y < 0.0;
+            tris.push(if outward {
+                tri
+            } else {
+                [tri[0], tri[2], tri[1]]
+            });
+        }
+        (p, tris)
+    }
+
+    #[test]
+    fn a_t_junction_is_closed_by_splitting_the_edge_that_runs_past_it() {
+        let (p, mut tris) = cube_with_t_junction();
+        let mut labels = vec![[0, 1]; tris.len()];
+        let open = |tris: &[[u32; 3]]| open_edges(tris).len();
+        assert_eq!(open(&tris), 3, "the long top edge and its two halves");
+        assert_eq!(split_t_junctions(&p, &mut tris, Some(&mut labels)), 1);
+        assert_eq!((open(&tris), tris.len(), labels.len()), (0, 14, 14));
+        let mesh = crate::LabeledMesh::from_raw(p.clone(), &tris, &labels).unwrap();
+        let report = crate::validate::validate(&mesh, &crate::validate::ValidateOptions::default());
+        assert!(report.is_valid(), "{report}");
+        let volumes = crate::geometry::label_volumes(&mesh);
+        assert!((volumes[&Label::new(1)] - 1.0).abs() < 1e-12);
+        // Closed: nothing to do, twice.
+        let before = tris.clone();
+        assert_eq!(split_t_junctions(&p, &mut tris, None), 0);
+        assert_eq!(tris, before);
+    }
+
+    #[test]
+    fn only_exactly_collinear_open_vertices_split_an_edge() {
+        // The midpoint moved off the edge by one ulp: no T-junction, nothing split.
+        let (mut p, mut tris) = cube_with_t_junction();
+        let m = p.len() - 1;
+        p[m].z = f64::from_bits(p[m].z.to_bits() - 1);
+        let before = tris.clone();
+        assert_eq!(split_t_junctions(&p, &mut tris, None), 0);
+        assert_eq!(tris, before);
     }
 
     #[test]
@@ -163,7 +357,7 @@ mod tests {
             DVec3::splat(5.0), // isolated: not on any edge
         ];
         let mut tris = vec![[0, 1, 2], [3, 4, 5]];
-        assert_eq!(stitch_open_vertices(&mut positions, &mut tris), 2);
+        assert_eq!(stitch_open_vertices(&mut positions, &mut tris), Some(2));
         assert_eq!(tris, vec![[0, 1, 2], [0, 2, 3]]);
         assert_eq!(positions.len(), 5);
         assert_eq!(positions[4], DVec3::splat(5.0));
