@@ -115,12 +115,22 @@ pub(crate) fn split_t_junctions(
     tris: &mut Vec<[u32; 3]>,
     labels: Option<&mut Vec<[u32; 2]>>,
 ) -> usize {
+    split_t_junctions_counted(positions, tris, labels).0
+}
+
+/// [`split_t_junctions`], also returning the number of exact tests made.
+fn split_t_junctions_counted(
+    positions: &[DVec3],
+    tris: &mut Vec<[u32; 3]>,
+    labels: Option<&mut Vec<[u32; 2]>>,
+) -> (usize, usize) {
     let n = positions.len();
     if tris.iter().flatten().any(|&v| v as usize >= n) {
-        return 0; // the mesh builder names the bad index
+        return (0, 0); // the mesh builder names the bad index
     }
     let mut labels = labels;
     let mut inserted = 0;
+    let mut tests = 0usize;
     for _pass in 0..3 {
         let open = open_edges(tris);
         if open.is_empty() {
@@ -140,7 +150,14 @@ pub(crate) fn split_t_junctions(
         // order from the edge's first corner (in the triangle's orientation).
         let mut splits: Vec<(usize, usize, Vec<u32>)> = Vec::new();
         let mut done = vec![false; tris.len()];
+        // A file of unrelated triangles (every edge open, long edges whose boxes hold
+        // most vertices) would make this quadratic; past this many exact tests the pass
+        // is dropped and the mesh stays as it is, for validation to report.
+        let budget = tests + TESTS_PER_ELEMENT * (open.len() + on_open.len());
         for &(lo, hi, t) in &open {
+            if tests > budget {
+                return (inserted, tests);
+            }
             if done[t] {
                 continue;
             }
@@ -160,6 +177,7 @@ pub(crate) fn split_t_junctions(
             let axis = (pb - pa).abs().max_position();
             let mut on: Vec<(f64, u32)> = Vec::new();
             bvh.query(&Aabb::from_points(&[pa, pb]), 0.0, |i| {
+                tests += 1;
                 let v = on_open[i as usize];
                 let p = positions[v as usize];
                 let (x, xa, xb) = (p[axis], pa[axis], pb[axis]);
@@ -193,8 +211,12 @@ pub(crate) fn split_t_junctions(
             }
         }
     }
-    inserted
+    (inserted, tests)
 }
+
+/// Exact on-segment tests per open edge and open vertex that [`split_t_junctions`] may
+/// spend in one pass (a T-junction curve's edge box holds a few of its vertices).
+const TESTS_PER_ELEMENT: usize = 16;
 
 /// Edges used by exactly one triangle: `(lower vertex, higher vertex, triangle)`, sorted.
 fn open_edges(tris: &[[u32; 3]]) -> Vec<(u32, u32, usize)> {
@@ -343,6 +365,28 @@ mod tests {
         let before = tris.clone();
         assert_eq!(split_t_junctions(&p, &mut tris, None), 0);
         assert_eq!(tris, before);
+    }
+
+    #[test]
+    fn unrelated_open_triangles_cost_a_bounded_number_of_tests() {
+        // Long thin triangles fanned around one axis: every edge is open, and every
+        // edge's box holds nearly every vertex. Nothing lies on another edge; the pass
+        // gives up after its budget instead of testing every pair.
+        let n = 2000u32;
+        let mut p = Vec::new();
+        let mut tris = Vec::new();
+        for i in 0..n {
+            let a = f64::from(i) * 0.001;
+            p.push(DVec3::new(-1.0, a.cos(), a.sin()));
+            p.push(DVec3::new(1.0, -a.cos(), -a.sin()));
+            p.push(DVec3::new(0.0, 0.5 * a.sin(), 0.01 + f64::from(i) * 1e-4));
+            tris.push([3 * i, 3 * i + 1, 3 * i + 2]);
+        }
+        let before = tris.clone();
+        let (inserted, tests) = split_t_junctions_counted(&p, &mut tris, None);
+        assert_eq!((inserted, &tris), (0, &before));
+        // Without the budget: 6.0M exact tests (measured), 500 per element.
+        assert!(tests <= 16 * 12_000 + 6_000, "{tests} tests");
     }
 
     #[test]
