@@ -506,22 +506,12 @@ fn commit_targets(
 /// The triangles of the surface components (triangles joined through shared vertices)
 /// whose enclosed volume is below `min_volume`, and how many such components there are.
 fn debris(mesh: &LabeledMesh, min_volume: f64) -> (Vec<mesh_core::TriId>, usize) {
-    fn find(parent: &mut [u32], mut i: u32) -> u32 {
-        while parent[i as usize] != i {
-            parent[i as usize] = parent[parent[i as usize] as usize];
-            i = parent[i as usize];
-        }
-        i
-    }
+    use mesh_core::union_find::{find, union};
     let mut parent: Vec<u32> = (0..mesh.vertex_capacity() as u32).collect();
     for t in mesh.triangles() {
         let [a, b, c] = mesh.tri(t).map(|v| v.raw());
-        for (x, y) in [(a, b), (b, c)] {
-            let (rx, ry) = (find(&mut parent, x), find(&mut parent, y));
-            if rx != ry {
-                parent[rx as usize] = ry;
-            }
-        }
+        union(&mut parent, a, b);
+        union(&mut parent, b, c);
     }
     let mut volume = vec![0.0f64; mesh.vertex_capacity()];
     let mut root_of = Vec::with_capacity(mesh.num_triangles());

@@ -57,22 +57,11 @@ impl Polygonization {
     /// Connected components (union–find over triangle edges): the topology of the
     /// surface at this grid's resolution, the reference the follower's is compared to.
     pub fn components(&self) -> usize {
-        fn find(parent: &mut [u32], mut i: u32) -> u32 {
-            while parent[i as usize] != i {
-                parent[i as usize] = parent[parent[i as usize] as usize];
-                i = parent[i as usize];
-            }
-            i
-        }
+        use mesh_core::union_find::{find, union};
         let mut parent: Vec<u32> = (0..self.positions.len() as u32).collect();
         for t in &self.triangles {
-            for e in 0..3 {
-                let a = find(&mut parent, t[e]);
-                let b = find(&mut parent, t[(e + 1) % 3]);
-                if a != b {
-                    parent[a as usize] = b;
-                }
-            }
+            union(&mut parent, t[0], t[1]);
+            union(&mut parent, t[1], t[2]);
         }
         let mut roots: Vec<u32> = self
             .triangles

@@ -31,7 +31,7 @@ pub mod remesh;
 pub mod solve;
 pub mod tracker;
 pub mod triangle_index;
-mod union_find;
+pub mod union_find;
 pub mod validate;
 
 pub use corner::Side;
