@@ -125,8 +125,9 @@ fn split_t_junctions_counted(
     labels: Option<&mut Vec<[u32; 2]>>,
 ) -> (usize, usize) {
     let n = positions.len();
-    if tris.iter().flatten().any(|&v| v as usize >= n) {
-        return (0, 0); // the mesh builder names the bad index
+    let labels_fit = labels.as_ref().is_none_or(|l| l.len() == tris.len());
+    if !labels_fit || tris.iter().flatten().any(|&v| v as usize >= n) {
+        return (0, 0); // the mesh builder names the bad index or the count mismatch
     }
     let mut labels = labels;
     let mut inserted = 0;
