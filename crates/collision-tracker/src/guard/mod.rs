@@ -215,21 +215,13 @@ impl CollisionGuard {
     }
 }
 
-/// An edit that only moves existing vertices.
-fn only_moves(edit: &Edit) -> bool {
-    edit.remove_tris.is_empty()
-        && edit.add_tris.is_empty()
-        && edit.new_vertices.is_empty()
-        && edit.remove_vertices.is_empty()
-}
-
 impl EditGuard for CollisionGuard {
     fn check(&mut self, mesh: &LabeledMesh, edit: &Edit) -> Result<(), Veto> {
         if self.options.unchecked {
             return Ok(());
         }
         self.stats.checked += 1;
-        if only_moves(edit) {
+        if edit.only_moves() {
             // Moving vertices of an intersection-free mesh, the end state can only
             // intersect if something passed through something on the way, which the
             // sweep's CCD (no false negatives) and tunnelling test see; the exact

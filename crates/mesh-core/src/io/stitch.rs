@@ -36,26 +36,17 @@ pub(crate) fn stitch_open_vertices(
     if tris.iter().flatten().any(|&v| v as usize >= n) {
         return None; // the mesh builder names the bad index, with the file's numbering
     }
-    // Open edges: unordered pairs used by exactly one triangle.
-    let mut edges: Vec<u64> = tris
-        .iter()
-        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
-        .map(|(a, b)| (u64::from(a.min(b)) << 32) | u64::from(a.max(b)))
-        .collect();
-    edges.sort_unstable();
-    let mut open = vec![false; n];
-    let mut any_open = false;
-    for run in edges.chunk_by(|a, b| a == b) {
-        if run.len() == 1 {
-            open[(run[0] >> 32) as usize] = true;
-            open[(run[0] & 0xffff_ffff) as usize] = true;
-            any_open = true;
-        }
-    }
-    drop(edges);
-    if !any_open {
+    let open_keys = open_edge_keys(tris);
+    if open_keys.is_empty() {
         return None;
     }
+    let mut open = vec![false; n];
+    for &key in &open_keys {
+        let [a, b] = key_ends(key);
+        open[a as usize] = true;
+        open[b as usize] = true;
+    }
+    drop(open_keys);
 
     // Group open vertices by exact position; the first of each group represents it.
     let key = |v: u32| {
@@ -219,20 +210,55 @@ fn split_t_junctions_counted(
 /// spend in one pass (a T-junction curve's edge box holds a few of its vertices).
 const TESTS_PER_ELEMENT: usize = 16;
 
-/// Edges used by exactly one triangle: `(lower vertex, higher vertex, triangle)`, sorted.
-fn open_edges(tris: &[[u32; 3]]) -> Vec<(u32, u32, usize)> {
-    let mut edges: Vec<(u32, u32, usize)> = tris
+/// The key of the unordered edge `{a, b}`: the lower end in the high 32 bits.
+fn edge_key(a: u32, b: u32) -> u64 {
+    (u64::from(a.min(b)) << 32) | u64::from(a.max(b))
+}
+
+/// The ends of an [`edge_key`], lower first.
+fn key_ends(key: u64) -> [u32; 2] {
+    [(key >> 32) as u32, (key & 0xffff_ffff) as u32]
+}
+
+/// The edges used by exactly one triangle, as sorted [`edge_key`]s: one sort of 8-byte
+/// keys, which is all a closed mesh costs the stitch.
+fn open_edge_keys(tris: &[[u32; 3]]) -> Vec<u64> {
+    let mut edges: Vec<u64> = tris
         .iter()
-        .enumerate()
-        .flat_map(|(t, tri)| (0..3).map(move |k| (tri[k], tri[(k + 1) % 3], t)))
-        .map(|(a, b, t)| (a.min(b), a.max(b), t))
+        .flat_map(|t| {
+            [
+                edge_key(t[0], t[1]),
+                edge_key(t[1], t[2]),
+                edge_key(t[2], t[0]),
+            ]
+        })
         .collect();
     edges.sort_unstable();
     edges
-        .chunk_by(|x, y| (x.0, x.1) == (y.0, y.1))
+        .chunk_by(|a, b| a == b)
         .filter(|run| run.len() == 1)
         .map(|run| run[0])
         .collect()
+}
+
+/// Edges used by exactly one triangle: `(lower vertex, higher vertex, triangle)`, sorted.
+fn open_edges(tris: &[[u32; 3]]) -> Vec<(u32, u32, usize)> {
+    let keys = open_edge_keys(tris);
+    let mut open: Vec<(u32, u32, usize)> = Vec::with_capacity(keys.len());
+    if keys.is_empty() {
+        return open;
+    }
+    for (t, tri) in tris.iter().enumerate() {
+        for k in 0..3 {
+            let key = edge_key(tri[k], tri[(k + 1) % 3]);
+            if keys.binary_search(&key).is_ok() {
+                let [a, b] = key_ends(key);
+                open.push((a, b, t));
+            }
+        }
+    }
+    open.sort_unstable();
+    open
 }
 
 #[cfg(test)]

@@ -114,6 +114,15 @@ impl Edit {
         self.remove_vertices.clear();
     }
 
+    /// True when the edit only moves existing vertices: it removes, adds and deletes
+    /// nothing (smoothing moves and their batches).
+    pub fn only_moves(&self) -> bool {
+        self.remove_tris.is_empty()
+            && self.add_tris.is_empty()
+            && self.new_vertices.is_empty()
+            && self.remove_vertices.is_empty()
+    }
+
     /// Position of a referenced vertex at the start of the pseudo-motion.
     pub fn start_position(&self, mesh: &LabeledMesh, v: VertexRef) -> DVec3 {
         match v {

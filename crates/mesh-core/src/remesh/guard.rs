@@ -179,7 +179,7 @@ pub fn bisect_moves<G: EditGuard + ?Sized>(
 /// few hundred moves, and clearing a flag per triangle slot each time made every batch
 /// cost as much as the whole mesh.
 pub(crate) fn is_batch(mesh: &LabeledMesh, edit: &Edit, claimed: &mut Vec<bool>) -> bool {
-    if !edit.remove_tris.is_empty() || !edit.add_tris.is_empty() || !edit.new_vertices.is_empty() {
+    if !edit.only_moves() {
         return false;
     }
     if claimed.len() < mesh.triangle_capacity() {
