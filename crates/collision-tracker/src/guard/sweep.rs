@@ -232,7 +232,12 @@ pub(crate) fn check_sweep(
         if t.movers() == 1 {
             let k = (0..3).find(|&k| t.moving(k)).unwrap_or(0);
             let tet = [t.x0[0], t.x0[1], t.x0[2], t.x1[k]];
-            let inside = |key: u32, p: DVec3| !t.has(key) && strictly_inside(&tet, p);
+            // The box test first: nearly every vertex of the edit is outside the
+            // tetrahedron's box, and the exact test costs five orientations.
+            let bounds = Aabb::from_points(&tet);
+            let outside = |p: DVec3| p.cmplt(bounds.min).any() || p.cmpgt(bounds.max).any();
+            let inside =
+                |key: u32, p: DVec3| !t.has(key) && !outside(p) && strictly_inside(&tet, p);
             if s.vertices.iter().any(|&(key, p)| inside(key, p))
                 || motion
                     .swept
