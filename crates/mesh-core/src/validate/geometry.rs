@@ -21,12 +21,12 @@ use crate::predicates::{below_min_extent, collinear, within_max_coordinate};
 /// Runs layer 3.
 pub(super) fn check(
     mesh: &LabeledMesh,
+    coordinates: CoordinateRange,
     ctx: &EdgeContext,
     cap: usize,
     report: &mut ValidationReport,
 ) {
     let positions = mesh.positions();
-    let in_range = coordinate_check(mesh);
     let parts: Vec<(Listed<VertexId>, Listed<VertexId>)> = (0..positions.len())
         .into_par_iter()
         .chunks(CHUNK)
@@ -39,7 +39,7 @@ pub(super) fn check(
                 }
                 if !positions[v].is_finite() {
                     non_finite.push(id, cap);
-                } else if !in_range(positions[v]) {
+                } else if !coordinates.contains(positions[v]) {
                     out_of_range.push(id, cap);
                 }
             }
@@ -60,7 +60,10 @@ pub(super) fn check(
             for t in range {
                 let t = TriId::new(t as u32);
                 if ctx.usable[t.idx()]
-                    && mesh.tri_positions(t).into_iter().all(&in_range)
+                    && mesh
+                        .tri_positions(t)
+                        .into_iter()
+                        .all(|p| coordinates.contains(p))
                     && is_zero_area(mesh, t)
                 {
                     out.push(t, cap);
@@ -88,11 +91,24 @@ pub(super) fn is_zero_area(mesh: &LabeledMesh, t: TriId) -> bool {
     collinear(p, q, r)
 }
 
-/// The test of one finite position against the supported range
-/// ([`crate::predicates::range`]): at most the largest coordinate, and, for the whole mesh,
-/// its largest live coordinate magnitude not below the smallest extent (when it is, every
-/// position fails). Non-finite positions fail too.
-pub(super) fn coordinate_check(mesh: &LabeledMesh) -> impl Fn(DVec3) -> bool + Sync {
+/// The supported coordinate range for one mesh ([`crate::predicates::range`]): every
+/// coordinate at most the largest, and the mesh's largest live coordinate magnitude not
+/// below the smallest extent (when it is, every position fails). Found once per
+/// validation by [`coordinate_range`] and shared by layers 3 and 5.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct CoordinateRange {
+    tiny: bool,
+}
+
+impl CoordinateRange {
+    /// Whether `p` is finite and inside the range.
+    pub fn contains(self, p: DVec3) -> bool {
+        !self.tiny && within_max_coordinate(p)
+    }
+}
+
+/// The [`CoordinateRange`] of `mesh`: one parallel pass over its live finite positions.
+pub(super) fn coordinate_range(mesh: &LabeledMesh) -> CoordinateRange {
     let positions = mesh.positions();
     let extent = (0..positions.len())
         .into_par_iter()
@@ -100,6 +116,7 @@ pub(super) fn coordinate_check(mesh: &LabeledMesh) -> impl Fn(DVec3) -> bool + S
         .filter(|&v| mesh.is_vertex_alive(VertexId::new(v as u32)) && positions[v].is_finite())
         .map(|v| positions[v].abs().max_element())
         .reduce(|| 0.0, f64::max);
-    let tiny = below_min_extent(extent);
-    move |p| !tiny && within_max_coordinate(p)
+    CoordinateRange {
+        tiny: below_min_extent(extent),
+    }
 }

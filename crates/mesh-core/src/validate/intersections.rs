@@ -21,8 +21,7 @@
 //! [`intersect_sharing_vertex`]: crate::predicates::intersect_sharing_vertex
 //! [`intersect_sharing_edge`]: crate::predicates::intersect_sharing_edge
 
-use glam::DVec3;
-
+use super::geometry::{CoordinateRange, coordinate_range};
 use super::report::Listed;
 use super::topology::{EdgeContext, is_degenerate};
 use crate::broadphase::{Aabb, Bvh};
@@ -55,20 +54,14 @@ impl Found {
 }
 
 /// The broad-phase box of triangle slot `t`: EMPTY (overlapping nothing) unless `usable`
-/// (then its vertex ids are safe to look up) and every corner passes `in_range` (finite
-/// and within the range where the predicates are exact, [`super::geometry::coordinate_check`]),
-/// so that the slot's id is its item id in the BVH.
-fn checkable_box(
-    mesh: &LabeledMesh,
-    t: u32,
-    usable: bool,
-    in_range: impl Fn(DVec3) -> bool,
-) -> Aabb {
+/// (then its vertex ids are safe to look up) and every corner is in `range` (finite and
+/// where the predicates are exact), so that the slot's id is its item id in the BVH.
+fn checkable_box(mesh: &LabeledMesh, t: u32, usable: bool, range: CoordinateRange) -> Aabb {
     if !usable {
         return Aabb::EMPTY;
     }
     let p = mesh.tri_positions(TriId::new(t));
-    if p.into_iter().all(in_range) {
+    if p.into_iter().all(|q| range.contains(q)) {
         Aabb::from_points(&p)
     } else {
         Aabb::EMPTY
@@ -76,18 +69,22 @@ fn checkable_box(
 }
 
 /// Runs layer 4: every intersecting pair counted, the `cap` smallest (by ids) listed.
-pub(super) fn check(mesh: &LabeledMesh, ctx: &EdgeContext, cap: usize) -> Listed<[TriId; 2]> {
+pub(super) fn check(
+    mesh: &LabeledMesh,
+    range: CoordinateRange,
+    ctx: &EdgeContext,
+    cap: usize,
+) -> Listed<[TriId; 2]> {
     let tris = mesh.tris();
     // One box per triangle slot, EMPTY (overlapping nothing) for those not checked, so
     // the item id is the triangle id.
     // `usable` first: only then are the vertex ids safe to look up.
-    let in_range = super::geometry::coordinate_check(mesh);
     let box_of = |t: u32| {
         checkable_box(
             mesh,
             t,
             ctx.usable[t as usize] && !is_degenerate(tris[t as usize]),
-            &in_range,
+            range,
         )
     };
     // Triangle slots fit in u32 (the mesh caps them), so the build cannot fail.
@@ -136,13 +133,13 @@ pub(super) fn check(mesh: &LabeledMesh, ctx: &EdgeContext, cap: usize) -> Listed
 pub fn any_intersection(mesh: &LabeledMesh) -> bool {
     use std::sync::atomic::{AtomicBool, Ordering};
     let tris = mesh.tris();
-    let in_range = super::geometry::coordinate_check(mesh);
+    let range = coordinate_range(mesh);
     let box_of = |t: u32| {
         let tri = tris[t as usize];
         let usable = mesh.is_triangle_alive(TriId::new(t))
             && tri.iter().all(|&v| mesh.is_vertex_alive(v))
             && !is_degenerate(tri);
-        checkable_box(mesh, t, usable, &in_range)
+        checkable_box(mesh, t, usable, range)
     };
     let Ok(bvh) = Bvh::build_from_fn(tris.len(), box_of) else {
         return false;

@@ -85,7 +85,7 @@ impl ValidateOptions {
 /// Validates `mesh`: layers 1–3 always, layer 4 when `opts.placement` and layers 1–3
 /// passed, layer 5 when `opts.intersections`.
 pub fn validate(mesh: &LabeledMesh, opts: &ValidateOptions) -> ValidationReport {
-    let (mut report, ctx) = layers_to_geometry(mesh, opts);
+    let (mut report, ctx, range) = layers_to_geometry(mesh, opts);
     if opts.placement && report.is_valid() {
         let mut listed = Listed::default();
         for m in crate::placement::misplaced_shells(mesh) {
@@ -94,7 +94,8 @@ pub fn validate(mesh: &LabeledMesh, opts: &ValidateOptions) -> ValidationReport 
         report.misplaced_shells = Some(listed);
     }
     if opts.intersections {
-        report.self_intersecting_pairs = Some(intersections::check(mesh, &ctx, opts.max_listed));
+        report.self_intersecting_pairs =
+            Some(intersections::check(mesh, range, &ctx, opts.max_listed));
     }
     report
 }
@@ -116,8 +117,8 @@ pub fn check_geometry(mesh: &LabeledMesh, opts: &ValidateOptions) -> ValidationR
 
 /// Layers 1–3 and 5: adds the exact self-intersection check (not placement).
 pub fn check_intersections(mesh: &LabeledMesh, opts: &ValidateOptions) -> ValidationReport {
-    let (mut report, ctx) = layers_to_geometry(mesh, opts);
-    report.self_intersecting_pairs = Some(intersections::check(mesh, &ctx, opts.max_listed));
+    let (mut report, ctx, range) = layers_to_geometry(mesh, opts);
+    report.self_intersecting_pairs = Some(intersections::check(mesh, range, &ctx, opts.max_listed));
     report
 }
 
@@ -139,13 +140,19 @@ fn layers_to_labels(
     (report, ctx)
 }
 
+/// Layers 1–3, with what layer 5 reuses: the edge context and the coordinate range.
 fn layers_to_geometry(
     mesh: &LabeledMesh,
     opts: &ValidateOptions,
-) -> (ValidationReport, topology::EdgeContext) {
+) -> (
+    ValidationReport,
+    topology::EdgeContext,
+    geometry::CoordinateRange,
+) {
     let (mut report, ctx) = layers_to_labels(mesh, opts);
-    geometry::check(mesh, &ctx, opts.max_listed, &mut report);
-    (report, ctx)
+    let range = geometry::coordinate_range(mesh);
+    geometry::check(mesh, range, &ctx, opts.max_listed, &mut report);
+    (report, ctx, range)
 }
 
 /// Validates a mesh at a pipeline stage boundary in debug builds, panicking with the
