@@ -267,8 +267,9 @@ pub fn fix(mesh: &LabeledMesh, cell_size: Option<f64>) -> Result<LabeledMesh, Fi
 
 /// Checks what the pipeline needs and cannot repair: topology (closed, no dangling,
 /// degenerate or duplicate triangle, a sound corner table), a front ≠ back label on every
-/// triangle, finite coordinates within the supported range. Inconsistent wedges and zero-area triangles are defects
-/// the pass repairs, so they are allowed here. Returns the report of layers 1–3.
+/// triangle, finite coordinates within the supported range. Inconsistent wedges and
+/// zero-area triangles are defects the pass repairs, so they are allowed here. Returns the
+/// report of layers 1–3.
 fn check_fix_input(mesh: &LabeledMesh) -> Result<ValidationReport, FixError> {
     let r = validate(mesh, &ValidateOptions::default());
     let fatal = !(r.dangling_references.is_empty()

@@ -617,7 +617,8 @@ pub struct ConvertArgs {
 /// `bench scaling --mesh`): vertices repeated at the same position on open edges are
 /// stitched and open edges split at the vertices lying on them
 /// ([`mesh_core::io::ReadOptions::stitch`]: the per-face vertices of STL-style exports,
-/// the T-junctions of CAD exports), and stderr says how many. `validate` and `convert` read files as they are.
+/// the T-junctions of CAD exports), and stderr says how many. `validate` and `convert`
+/// read files as they are.
 fn read_work_mesh(
     path: &std::path::Path,
 ) -> Result<mesh_core::LabeledMesh, mesh_core::io::IoError> {

@@ -128,8 +128,7 @@ pub(super) fn check(
 /// a repair — the first pair is found long before the last: once one is found, every task
 /// skips its remaining exact tests.
 /// Triangles that layers 1–3 would reject (dead, dangling, degenerate, non-finite or out of
-/// range) are
-/// left out, so any mesh is safe to ask. The answer does not depend on the thread count.
+/// range) are left out, so any mesh is safe to ask. The answer does not depend on the thread count.
 pub fn any_intersection(mesh: &LabeledMesh) -> bool {
     use std::sync::atomic::{AtomicBool, Ordering};
     let tris = mesh.tris();
