@@ -161,9 +161,14 @@ pub fn run_scene_with(
         (None, _) => scene.dt,
     };
     if !(scene_dt.is_finite() && scene_dt > 0.0) {
-        return Err(RunError::Config(format!(
-            "--dt must be finite and positive, got {scene_dt}"
-        )));
+        return Err(RunError::Config(match config.dt {
+            Some(_) => format!("--dt must be finite and positive, got {scene_dt}"),
+            // Derived from the scene: say so, not name an option the user never gave.
+            None => format!(
+                "scene `{}` derived a time step of {scene_dt} (give one with --dt)",
+                config.scene
+            ),
+        }));
     }
     let frames_dir = match (&config.out, config.every) {
         (_, 0) => None,

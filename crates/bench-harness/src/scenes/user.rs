@@ -19,6 +19,7 @@
 
 use glam::DVec3;
 use mesh_core::generators;
+use mesh_core::predicates::{below_min_extent, within_max_coordinate};
 use mesh_core::remesh::improve::mean_edge_length;
 use mesh_core::{Label, LabeledMesh};
 use surftrack::grid_tracker::thinnest_shell;
@@ -188,6 +189,33 @@ fn bbox_centre(mesh: &LabeledMesh) -> DVec3 {
     }
 }
 
+/// Refuses a mesh outside the coordinate range the library works in
+/// ([`mesh_core::predicates::MAX_COORDINATE`], [`mesh_core::predicates::MIN_EXTENT`]),
+/// naming the first vertex out of it. Why here: the flow's time step is derived from the
+/// mean edge length, which such a mesh makes infinite or zero, and the run would then
+/// stop on a time step the user never gave instead of on the mesh.
+fn check_range(mesh: &LabeledMesh) -> Result<(), String> {
+    let mut extent = 0.0f64;
+    for v in mesh.vertices() {
+        let p = mesh.position(v);
+        if !within_max_coordinate(p) {
+            return Err(format!(
+                "the mesh's vertex {v} is at ({:e}, {:e}, {:e}): coordinates must be finite and at most 2^100 ≈ 1.3e30 \
+                 in magnitude (rescale the mesh)",
+                p.x, p.y, p.z
+            ));
+        }
+        extent = extent.max(p.abs().max_element());
+    }
+    if below_min_extent(extent) {
+        return Err(format!(
+            "the mesh's largest coordinate magnitude is {extent:e}, below 2^-100 ≈ 7.9e-31 \
+             (rescale the mesh)"
+        ));
+    }
+    Ok(())
+}
+
 /// The scene of `spec` (the part after [`PREFIX`]) on `o.mesh`.
 pub fn build(
     spec: &str,
@@ -202,6 +230,7 @@ pub fn build(
     if mesh.num_triangles() == 0 {
         return Err(spec.error("the mesh has no triangles".into()));
     }
+    check_range(&mesh).map_err(|m| spec.error(m))?;
     // Before any splitting (up to millions of triangles): the trackers refuse a part
     // whose outside label is not the material it lies in, and `fix` is the remedy.
     if let Some(m) = mesh_core::placement::misplaced_shells(&mesh).first() {
@@ -378,6 +407,32 @@ mod tests {
             .to_string();
         assert!(message.contains("lies in material 1"), "{message}");
         assert!(message.contains("surftrack fix"), "{message}");
+    }
+
+    /// A mesh too large or too small for the predicates is refused naming the mesh (its
+    /// first vertex out of range, or its size), not the time step derived from it.
+    #[test]
+    fn a_mesh_out_of_range_is_an_error_naming_it_not_the_time_step() {
+        for (scale, expect) in [
+            (1e200, "the mesh's vertex v0 is at"),
+            (f64::INFINITY, "the mesh's vertex v"),
+            (1e-200, "largest coordinate magnitude is"),
+        ] {
+            let (p, t, l) = double_bubble(0.5, 4).unwrap().to_raw();
+            let p: Vec<DVec3> = p.into_iter().map(|p| p * scale).collect();
+            let o = SceneOptions {
+                mesh: Some(LabeledMesh::from_raw(p, &t, &l).unwrap()),
+                ..SceneOptions::default()
+            };
+            for flow in ["normal", "enright", "mean-curvature"] {
+                let message = build(flow, &o, &FlowOptions::default())
+                    .err()
+                    .expect("refused")
+                    .to_string();
+                assert!(message.contains(expect), "{scale}: {message}");
+                assert!(message.contains("rescale the mesh"), "{message}");
+            }
+        }
     }
 
     fn options() -> SceneOptions {
