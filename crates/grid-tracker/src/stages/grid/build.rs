@@ -26,10 +26,10 @@ use super::tiles::{
 use super::{Grid, GridError, GridOptions, Lattice, TileInfo};
 
 /// At most this many cells along any axis (ids and tile keys stay far from `i32` limits).
-const MAX_CELLS_PER_AXIS: f64 = (1u64 << 22) as f64;
+pub(super) const MAX_CELLS_PER_AXIS: f64 = (1u64 << 22) as f64;
 /// ℓ must exceed the coordinates' magnitude times this, so that consecutive planes are
 /// distinct floats and [`Lattice::locate`] corrects its rounded guess in one step.
-const MIN_RELATIVE_CELL: f64 = 1.0 / (1u64 << 40) as f64;
+pub(super) const MIN_RELATIVE_CELL: f64 = 1.0 / (1u64 << 40) as f64;
 /// Hard bound on incidences whatever the options say: every id stays a `u32`.
 const HARD_ENTRY_LIMIT: u64 = 1 << 28;
 

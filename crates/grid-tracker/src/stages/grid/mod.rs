@@ -117,7 +117,8 @@ pub enum GridError {
     /// ℓ is too small for the coordinates: too many cells per axis, or below the
     /// resolution of `f64` at the mesh's distance from the origin.
     #[error(
-        "cell size ℓ = {cell_size} is too fine for a mesh spanning {extent} at coordinates up to {magnitude}"
+        "cell size ℓ = {cell_size} is too fine for a mesh spanning {extent} at coordinates up to {magnitude}: {remedy}",
+        remedy = too_fine_remedy(*cell_size, *extent, *magnitude)
     )]
     TooFine {
         /// ℓ.
@@ -373,6 +374,25 @@ impl Grid {
     pub(crate) fn node_in_tile(&self, tile: u32, local: usize) -> NodeId {
         let info = &self.tile_info[tile as usize];
         NodeId(info.node_base + mask_rank(&info.nodes, &info.node_prefix, local))
+    }
+}
+
+/// What a [`GridError::TooFine`] asks of the user: the bound that was broken, with the
+/// smallest ℓ it allows, and the remedy (a mesh far from the origin is fixed by moving it,
+/// not by a coarser grid the user may not want).
+fn too_fine_remedy(cell_size: f64, extent: f64, magnitude: f64) -> String {
+    let near_origin = magnitude * build::MIN_RELATIVE_CELL;
+    if near_origin > cell_size {
+        format!(
+            "cell corners are distinct floats only for ℓ of at least 2^-40 ≈ 9.1e-13 × the \
+             largest coordinate ({near_origin:.3e} here); move the mesh towards the origin \
+             (or give a larger ℓ)"
+        )
+    } else {
+        format!(
+            "at most 2^22 cells per axis (ℓ ≥ {:.3e} here); give a larger ℓ",
+            extent / build::MAX_CELLS_PER_AXIS
+        )
     }
 }
 

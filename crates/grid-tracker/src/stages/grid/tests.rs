@@ -152,10 +152,21 @@ fn bad_input_is_a_typed_error() {
         build_grid(&mesh, 1e-5, &o),
         Err(GridError::TooManyCells { .. })
     ));
-    assert!(matches!(
-        build_grid(&mesh, 1e-12, &o),
-        Err(GridError::TooFine { .. })
-    ));
+    let fine = build_grid(&mesh, 1e-12, &o).unwrap_err();
+    assert!(matches!(fine, GridError::TooFine { .. }));
+    assert!(fine.to_string().contains("cells per axis"), "{fine}");
+    // A unit sphere 10¹² from the origin: ℓ = 0.35 is below what f64 resolves there, and
+    // the remedy is to move the mesh, which the message says.
+    let mut far = mesh.clone();
+    for v in mesh.vertices() {
+        far.set_position(v, mesh.position(v) + DVec3::new(1e12, 0.0, 0.0));
+    }
+    let far = build_grid(&far, 0.35, &o).unwrap_err();
+    assert!(matches!(far, GridError::TooFine { .. }));
+    assert!(
+        far.to_string().contains("move the mesh towards the origin"),
+        "{far}"
+    );
     let mut nan = mesh.clone();
     nan.set_position(mesh_core::VertexId::new(3), DVec3::new(f64::NAN, 0.0, 0.0));
     match build_grid(&nan, 0.1, &o) {
