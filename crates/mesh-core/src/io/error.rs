@@ -233,7 +233,8 @@ pub enum IoErrorKind {
     IndexOutOfRange {
         /// The face.
         at: Location,
-        /// The offending index (0-based; OBJ indices are converted).
+        /// The offending index as the file writes it: 0-based in PLY; in OBJ 1-based, or
+        /// negative (counting back from the last vertex read).
         index: i64,
         /// The number of vertices.
         vertex_count: u64,

@@ -59,16 +59,17 @@ fn label_of_material(name: &[u8], line: u64) -> Result<Option<[u32; 2]>, IoError
 
 /// Why a face token names no vertex.
 enum BadCorner {
-    /// Index 0, or a relative index before the first vertex (0-based value).
+    /// Index 0, or a relative index before the first vertex (as written).
     Range(i64),
     /// Not a number (shortened text).
     Syntax(String),
 }
 
 /// Resolves one face token (`v`, `v/vt`, `v//vn`, `v/vt/vn`) to a 0-based vertex index,
-/// relative indices against the `seen` vertices so far. Indices past the end are checked
-/// once the whole file is read (OBJ allows referring to later vertices).
-fn vertex_of(token: &[u8], seen: usize) -> Result<i64, BadCorner> {
+/// relative indices against the `seen` vertices so far; returns it with the index as
+/// written, which errors report (the user looks for what the file says). Indices past the
+/// end are checked once the whole file is read (OBJ allows referring to later vertices).
+fn vertex_of(token: &[u8], seen: usize) -> Result<(i64, i64), BadCorner> {
     let head = token.split(|&b| b == b'/').next().unwrap_or(token);
     let k = parse_int(head).ok_or_else(|| BadCorner::Syntax(shown(token)))?;
     let resolved = if k > 0 {
@@ -76,12 +77,10 @@ fn vertex_of(token: &[u8], seen: usize) -> Result<i64, BadCorner> {
     } else {
         (seen as i64).saturating_add(k)
     };
-    if k == 0 {
-        Err(BadCorner::Range(-1))
-    } else if resolved < 0 {
-        Err(BadCorner::Range(resolved))
+    if k == 0 || resolved < 0 {
+        Err(BadCorner::Range(k))
     } else {
-        Ok(resolved)
+        Ok((resolved, k))
     }
 }
 
@@ -135,14 +134,15 @@ pub(crate) fn parse_obj(bytes: &[u8]) -> Result<RawMesh, IoErrorKind> {
                 }
                 let mut tri = [0u32; 3];
                 for (slot, tok) in tri.iter_mut().zip(corners) {
-                    let index = vertex_of(tok, positions.len()).map_err(|e| match e {
-                        BadCorner::Range(index) => IoErrorKind::IndexOutOfRange {
-                            at: at(),
-                            index,
-                            vertex_count: positions.len() as u64,
-                        },
-                        BadCorner::Syntax(token) => IoErrorKind::BadValue { at: at(), token },
-                    })?;
+                    let (index, written) =
+                        vertex_of(tok, positions.len()).map_err(|e| match e {
+                            BadCorner::Range(index) => IoErrorKind::IndexOutOfRange {
+                                at: at(),
+                                index,
+                                vertex_count: positions.len() as u64,
+                            },
+                            BadCorner::Syntax(token) => IoErrorKind::BadValue { at: at(), token },
+                        })?;
                     // Indices past the last vertex read so far are checked at the end of the
                     // file; past MAX_INDEX they can never be valid.
                     *slot = u32::try_from(index)
@@ -150,7 +150,7 @@ pub(crate) fn parse_obj(bytes: &[u8]) -> Result<RawMesh, IoErrorKind> {
                         .filter(|&v| v <= MAX_INDEX)
                         .ok_or_else(|| IoErrorKind::IndexOutOfRange {
                             at: at(),
-                            index,
+                            index: written,
                             vertex_count: positions.len() as u64,
                         })?;
                 }
@@ -191,9 +191,11 @@ pub(crate) fn parse_obj(bytes: &[u8]) -> Result<RawMesh, IoErrorKind> {
             .copied()
             .find(|&v| v as usize >= vertex_count)
             .unwrap_or(u32::MAX);
+        // Only a positive index can point past the end (a relative one is resolved against
+        // vertices already read): as written, it is one more than the 0-based index.
         return Err(IoErrorKind::IndexOutOfRange {
             at: Location::element(Element::Face, face as u64, face_line(bytes, face)),
-            index: i64::from(index),
+            index: i64::from(index) + 1,
             vertex_count: vertex_count as u64,
         });
     }

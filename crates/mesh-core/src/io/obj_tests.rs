@@ -109,20 +109,20 @@ fn malformed_obj_errors_name_the_line() {
         }),
         (
             "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n",
-            |e| matches!(e, IoErrorKind::IndexOutOfRange { at, index: -1, vertex_count: 3 } if *at == face(0, 4)),
+            |e| matches!(e, IoErrorKind::IndexOutOfRange { at, index: 0, vertex_count: 3 } if *at == face(0, 4)),
         ),
         ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -4 1 2\n", |e| {
-            matches!(e, IoErrorKind::IndexOutOfRange { index: -1, .. })
+            matches!(e, IoErrorKind::IndexOutOfRange { index: -4, .. })
         }),
         (
             "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n# gap\nf 1 2 5\n",
-            |e| matches!(e, IoErrorKind::IndexOutOfRange { at, index: 4, vertex_count: 3 } if *at == face(1, 6)),
+            |e| matches!(e, IoErrorKind::IndexOutOfRange { at, index: 5, vertex_count: 3 } if *at == face(1, 6)),
         ),
         ("v 0 0 0\nf 1 2 99999999999\n", |e| {
             matches!(
                 e,
                 IoErrorKind::IndexOutOfRange {
-                    index: 99999999998,
+                    index: 99999999999,
                     ..
                 }
             )
