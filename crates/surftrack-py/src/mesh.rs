@@ -68,7 +68,7 @@ impl PyMesh {
     /// labels must be a closed surface and reads as inside 1, outside 0. With stitch=True,
     /// vertices repeated at one position on open edges (every face on its own vertices,
     /// as STL-style exporters write them) become one first, and open edges are split at
-    /// the open vertices lying exactly on them (T-junctions). Raises OSError naming the
+    /// the open vertices lying on them (T-junctions). Raises OSError naming the
     /// problem.
     #[staticmethod]
     #[pyo3(signature = (path, stitch = false))]

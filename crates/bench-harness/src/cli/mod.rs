@@ -637,7 +637,7 @@ fn read_work_mesh(
     }
     if report.t_junction_vertices > 0 {
         eprintln!(
-            "{}: split open edges at {} vertices lying exactly on them (T-junctions, as CAD \
+            "{}: split open edges at {} vertices lying on them (T-junctions, as CAD \
              exporters leave them)",
             path.display(),
             report.t_junction_vertices

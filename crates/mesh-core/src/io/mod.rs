@@ -113,8 +113,9 @@ pub struct ReadOptions {
     pub unlabeled: Unlabeled,
     /// Merge vertices at exactly the same position that lie on open edges (files that
     /// give every triangle its own vertices, as STL-style exporters do), before labels
-    /// are settled, then split open edges at the open vertices lying exactly on them
-    /// (T-junctions, as CAD exporters leave them); a closed mesh is never changed. Off by
+    /// are settled, then split open edges at the open vertices lying on them, up to the
+    /// rounding of stored coordinates (T-junctions, as CAD exporters leave them); a
+    /// closed mesh is never changed. Off by
     /// default, so that a reader returns what the file says; the command line's repair and
     /// run commands turn it on. [`read_mesh_reported`] says how many vertices were merged
     /// and inserted.

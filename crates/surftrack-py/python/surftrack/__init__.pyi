@@ -44,7 +44,8 @@ class Mesh:
     @staticmethod
     def read(path: _Path, stitch: bool = False) -> "Mesh":
         """Reads PLY or OBJ; stitch=True merges vertices repeated at one position on open
-        edges (STL-style per-face vertices) first; raises OSError."""
+        edges (STL-style per-face vertices) first, then splits open edges at the open
+        vertices lying on them (T-junctions); raises OSError."""
     def write(self, path: _Path) -> None:
         """Writes PLY or OBJ by extension; raises OSError."""
     @property
