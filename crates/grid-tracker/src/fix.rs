@@ -42,9 +42,9 @@ use mesh_core::validate::{
 use mesh_core::{Label, LabelVolume, LabeledMesh, MaterialCensus, StageTiming, TriId};
 
 use crate::params::{GridParams, ImproveScope};
-use crate::pipeline::{PassStats, PipelineError, Timings, improve_mesh, run_pass};
+use crate::pipeline::{PassOutcome, PassStats, PipelineError, Timings, improve_mesh, run_pass};
 use crate::scale::{CellSizeChoice, CellSizeRule, default_cell_size};
-use crate::stages::grid::Lattice;
+use crate::stages::grid::{GridError, Lattice};
 use crate::union_volume::union_volume;
 
 /// Options of [`fix_with`].
@@ -197,8 +197,8 @@ pub struct FixOutcome {
 pub struct MaterialLoss {
     /// ℓ of the repair.
     pub cell_size: f64,
-    /// The rule that chose ℓ: at [`CellSizeRule::SurfaceCellBound`] a finer ℓ is no remedy
-    /// (the grid would exceed its budget), which the message says.
+    /// The rule that chose ℓ: at a bound ([`CellSizeRule::is_bound`]) a finer ℓ is no
+    /// remedy (the grid would exceed its budget), which the message says.
     pub cell_size_rule: CellSizeRule,
     /// Vanished materials with their input volumes: those with a bounded volume in the
     /// input and none in the output, and every label no output triangle carries any more
@@ -236,7 +236,7 @@ impl std::fmt::Display for MaterialLoss {
                 100.0 * c.tolerance
             ));
         }
-        let remedy = if self.cell_size_rule == CellSizeRule::SurfaceCellBound {
+        let remedy = if self.cell_size_rule.is_bound() {
             "ℓ is at its lower bound for a surface this large (a finer --cell would exceed the \
              grid's budget): a material this small beside one this large cannot be kept in one \
              repair; repair a crop around it"
@@ -482,15 +482,8 @@ pub fn fix_with(mesh: &LabeledMesh, options: &FixOptions) -> Result<FixOutcome, 
 
     check_outside_label(&input_report, &before)?;
 
-    let pass = run_pass(
-        mesh.clone(),
-        &VertexAttributes::none(),
-        None,
-        params,
-        cell_size,
-        params.step_seed(0),
-        &mut timings,
-    )?;
+    let (pass, choice) = pass_within_grid_budget(mesh, params, choice, &mut timings)?;
+    let cell_size = choice.cell_size;
     let stats: PassStats = pass.stats;
     let mut out = pass.mesh;
     timings.check_budget(params.time_budget, "pass")?;
@@ -624,6 +617,56 @@ pub fn fix_with(mesh: &LabeledMesh, options: &FixOptions) -> Result<FixOutcome, 
     })
 }
 
+/// Coarsenings of a chosen ℓ that [`pass_within_grid_budget`] tries before it gives up.
+const MAX_BUDGET_COARSENINGS: usize = 4;
+
+/// The repair pass at `choice`'s ℓ, coarsened while the grid would exceed its incidence
+/// budget and ℓ was not given: the default ℓ comes from edge lengths and thicknesses,
+/// which do not foresee how many cells the boxes of large slanted triangles cover (a rod
+/// through a coarse sphere: 4·10⁹ incidences), and the user asked for a repair, not for a
+/// cell size. Each try scales ℓ by the cube root of the excess (box cells scale as ℓ⁻³,
+/// surface cells as ℓ⁻²), with 10 % to spare; a material the coarser ℓ cannot hold is
+/// then reported as a loss, naming the bound.
+fn pass_within_grid_budget(
+    mesh: &LabeledMesh,
+    params: &GridParams,
+    mut choice: CellSizeChoice,
+    timings: &mut Timings,
+) -> Result<(PassOutcome, CellSizeChoice), FixError> {
+    let mut tries = 0;
+    loop {
+        let pass = run_pass(
+            mesh.clone(),
+            &VertexAttributes::none(),
+            None,
+            params,
+            choice.cell_size,
+            params.step_seed(0),
+            timings,
+        );
+        match pass {
+            Err(PipelineError::Grid(GridError::TooManyCells { needed, limit }))
+                if choice.rule != CellSizeRule::Given && tries < MAX_BUDGET_COARSENINGS =>
+            {
+                tries += 1;
+                let factor = 1.1 * (needed as f64 / limit.max(1) as f64).cbrt();
+                let cell_size = choice.cell_size * factor.max(1.1);
+                choice = CellSizeChoice {
+                    cell_size,
+                    rule: CellSizeRule::GridBudget,
+                    thinnest: choice.thinnest,
+                    reason: format!(
+                        "{}; coarsened to ℓ = {cell_size:.4}: at ℓ = {:.4} the grid needed \
+                         {needed} cell–triangle incidences, above its budget of {limit}",
+                        choice.reason, choice.cell_size
+                    ),
+                };
+            }
+            other => return Ok((other?, choice)),
+        }
+    }
+}
+
 /// Improves the rebuilt mesh `out` of a [`fix_with`] (when [`GridParams::improve`] asks
 /// for it).
 fn improve_repaired(
@@ -729,6 +772,52 @@ fn is_same_triangle(a: &LabeledMesh, b: &LabeledMesh, t: TriId) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A slanted rod 0.3 × 0.3 × 20 through a box: ℓ from the rod's thickness makes its
+    /// twelve long triangles' boxes cover about 10⁹ cells, far above the grid's budget.
+    /// The default ℓ is coarsened until the grid fits, and the repair keeps both
+    /// materials; a given ℓ is not changed behind the user's back.
+    #[test]
+    fn a_default_cell_size_over_the_grid_budget_is_coarsened_until_it_fits() {
+        use glam::{DQuat, DVec3};
+        let l = Label::new;
+        let boxed =
+            mesh_core::generators::cuboid(DVec3::splat(-1.0), DVec3::splat(1.0), [l(0), l(1)])
+                .unwrap();
+        let rod = mesh_core::generators::cuboid(
+            DVec3::new(-0.15, -0.15, -10.0),
+            DVec3::new(0.15, 0.15, 10.0),
+            [l(0), l(2)],
+        )
+        .unwrap();
+        let (p, t, labels) = rod.to_raw();
+        let turn = DQuat::from_euler(glam::EulerRot::XYZ, 0.7, 0.5, 0.3);
+        let p: Vec<DVec3> = p.into_iter().map(|p| turn * p).collect();
+        let rod = LabeledMesh::from_raw(p, &t, &labels).unwrap();
+        let mesh = LabeledMesh::disjoint_union(&[boxed, rod]).unwrap();
+
+        let out = fix_with(&mesh, &FixOptions::default()).expect("coarsened, repaired");
+        let choice = &out.report.cell_size_choice;
+        assert_eq!(choice.rule, CellSizeRule::GridBudget, "{}", choice.reason);
+        assert!(choice.reason.contains("coarsened"), "{}", choice.reason);
+        assert!(
+            out.report.validation.is_valid(),
+            "{}",
+            out.report.validation
+        );
+        assert!(out.report.vanished.is_empty());
+        assert!(out.report.volume_check.relative_change < 0.02);
+
+        let given = FixOptions {
+            params: GridParams {
+                cell_size: Some(0.02),
+                ..FixOptions::default().params
+            },
+            ..FixOptions::default()
+        };
+        let refused = fix_with(&mesh, &given).unwrap_err();
+        assert!(refused.to_string().contains("incidences"), "{refused}");
+    }
 
     /// A loss message shows a tiny volume in exponent form (not as 0.000000) and, when ℓ
     /// sat at its surface-cell bound, says a finer `--cell` is no remedy.

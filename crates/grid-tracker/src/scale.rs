@@ -45,6 +45,21 @@ pub enum CellSizeRule {
     ThinnestMaterial,
     /// The lower bound from [`MAX_SURFACE_CELLS`].
     SurfaceCellBound,
+    /// Coarsened from the rule's choice until the grid fit its incidence budget
+    /// ([`crate::GridOptions`]'s `max_cell_entries`): large triangles at a slant cover
+    /// many cells with their boxes, which the surface-cell bound does not foresee.
+    GridBudget,
+}
+
+impl CellSizeRule {
+    /// Whether ℓ sat at a bound rather than at what the geometry asked for: a finer ℓ
+    /// would not fit the grid, so it is no remedy for a lost material.
+    pub fn is_bound(self) -> bool {
+        matches!(
+            self,
+            CellSizeRule::SurfaceCellBound | CellSizeRule::GridBudget
+        )
+    }
 }
 
 /// The cell size used and why (recorded in [`crate::FixReport`] and by
