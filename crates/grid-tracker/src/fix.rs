@@ -237,9 +237,9 @@ impl std::fmt::Display for MaterialLoss {
             ));
         }
         let remedy = if self.cell_size_rule.is_bound() {
-            "ℓ is at its lower bound for a surface this large (a finer --cell would exceed the \
-             grid's budget): a material this small beside one this large cannot be kept in one \
-             repair; repair a crop around it"
+            "ℓ is as fine as the grid's budget allows for this mesh (a finer --cell would \
+             exceed it), so a material too thin for it cannot be kept in one repair; repair a \
+             crop around it"
         } else {
             "a finer cell size (--cell) may keep it"
         };
