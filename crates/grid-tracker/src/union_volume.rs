@@ -8,16 +8,22 @@
 //! being checked.
 //!
 //! Method: a lattice of lines along one axis (the bounding box's shortest, so that flat
-//! parts are crossed, not grazed), spaced `h` apart at cell centres. Along each line the
+//! parts are crossed, not grazed), one line in each `h × h` cell of the cross-section, at
+//! a position within its cell drawn from a hash of the cell (stratified sampling,
+//! deterministic). Along each line the
 //! crossings with the mesh are exact ([`cross_axis_line_triangle`], with the
 //! Simulation-of-Simplicity perturbation of the material stage, so a line through an edge
 //! or a vertex counts once); walking them in order keeps the winding count of the
 //! outside material 0, which is 1 outside every material and less inside at least one
 //! (inside two overlapping materials it is −1). The union's length along the line is the
 //! total length where it is below 1 — exact up to rounding. The volume is `h²` times the
-//! sum of lengths: midpoint quadrature over the lattice, whose error comes only from the
-//! silhouette, at most about `h / 2` times the silhouette's length relative to the
-//! projected area (0.4 % for a unit square at the default 2¹⁷ lines).
+//! sum of lengths. The error comes only from the cells the silhouette crosses. Why
+//! stratified rather than cell centres: with centres, each silhouette cell's error has one
+//! sign along a straight edge, so the error adds up to about `h / 2` times the
+//! silhouette's length, which is the whole volume's order for a plate seen edge-on (three
+//! crossing 10 × 10 × 0.2 plates: +6.8 %, so `fix` refused a correct repair); with a
+//! random point per cell it is unbiased and the errors of those cells add up only as
+//! their square root (0.3 % there).
 
 use glam::{DVec2, DVec3};
 use mesh_core::predicates::{Axis, cross_axis_line_triangle};
@@ -70,10 +76,13 @@ pub fn union_volume(mesh: &LabeledMesh) -> Option<UnionVolume> {
     }
     let h = (eb * ec / UNION_LINES as f64).sqrt();
     let (nb, nc) = ((eb / h).ceil() as usize, (ec / h).ceil() as usize);
-    let line_at =
-        |i: usize, j: usize| DVec2::new(lo[b] + (i as f64 + 0.5) * h, lo[c] + (j as f64 + 0.5) * h);
+    let line_at = |i: usize, j: usize| {
+        let (u, v) = cell_point(i, j);
+        DVec2::new(lo[b] + (i as f64 + u) * h, lo[c] + (j as f64 + v) * h)
+    };
     // Triangles binned by the blocks of lines (one row along `b`, BLOCK lines along `c`)
-    // their projection may meet, one line of slack each way.
+    // their projection may meet: the lines of the cells it overlaps, one cell of slack
+    // each way.
     let nblk = nc.div_ceil(BLOCK);
     let mut bins: Vec<Vec<u32>> = vec![Vec::new(); nb * nblk];
     let index = |x: f64, o: f64, n: usize| ((x - o) / h - 0.5).clamp(0.0, (n - 1) as f64);
@@ -146,10 +155,39 @@ pub fn union_volume(mesh: &LabeledMesh) -> Option<UnionVolume> {
     })
 }
 
+/// The point of cell `(i, j)` its line passes through, as fractions of the cell in
+/// `[0, 1)²`: a hash of the cell (SplitMix64's finaliser), so the same for every run and
+/// thread count.
+fn cell_point(i: usize, j: usize) -> (f64, f64) {
+    let mix = |mut z: u64| {
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    };
+    let z = mix((i as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ mix(j as u64 ^ 0x5851_f42d));
+    let unit = |bits: u64| (bits >> 11) as f64 / (1u64 << 53) as f64;
+    (unit(z), unit(mix(z)))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::test_util::{cube, sphere, union};
+
+    /// Three orthogonal plates 10 × 10 × 0.2 crossing at the origin: two of them are
+    /// edge-on to the lines whatever the axis. |∪| = 3 · 20 − 3 · 0.4 + 0.008.
+    #[test]
+    fn crossing_plates_seen_edge_on_are_measured_within_half_a_percent() {
+        let plate = |half: DVec3, label| cube(-half, half, 0, label);
+        let plates = union(&[
+            plate(DVec3::new(5.0, 5.0, 0.1), 1),
+            plate(DVec3::new(5.0, 0.1, 5.0), 2),
+            plate(DVec3::new(0.1, 5.0, 5.0), 3),
+        ]);
+        let exact = 60.0 - 1.2 + 0.008;
+        let v = union_volume(&plates).expect("volume").volume;
+        assert!((v - exact).abs() < exact * 0.005, "{v} vs {exact}");
+    }
 
     #[test]
     fn a_box_and_two_overlapping_boxes() {
