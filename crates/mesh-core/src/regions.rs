@@ -7,6 +7,8 @@
 //! boundary component (its outer skin and one per cavity): telling which shells bound the
 //! same connected volume needs point location, which is the grid tracker's job.
 
+use glam::DVec3;
+
 use crate::corner::Side;
 use crate::ids::{CornerId, Label, TriId};
 use crate::mesh::LabeledMesh;
@@ -100,6 +102,12 @@ impl LabeledMesh {
         // order of their lowest side, as a flood from each unvisited side in turn would.
         let mut side_shell = vec![u32::MAX; n_sides];
         let mut shells: Vec<RegionShell> = Vec::new();
+        // Each shell's cones start from a vertex of its first side, not from the origin:
+        // a closed shell's volume is the same from any apex, but a mesh far from the
+        // origin (coordinates 10⁶, a part of size 1) sums cones of size 10¹² that cancel
+        // to a volume of size 1, leaving rounding of the cones' size (its 3V/A, which sets
+        // `fix`'s ℓ, came out 12 % off).
+        let mut apex: Vec<DVec3> = Vec::new();
         for t in self.triangles() {
             for side in [Side::Front, Side::Back] {
                 let s = t.idx() * 2 + side.index();
@@ -114,6 +122,7 @@ impl LabeledMesh {
                         volume: 0.0,
                         area: 0.0,
                     });
+                    apex.push(self.position(self.corner_vertex(CornerId::new((s * 3) as u32))));
                 } else {
                     side_shell[s] = side_shell[root];
                 }
@@ -121,10 +130,11 @@ impl LabeledMesh {
                 let c0 = CornerId::new((s * 3) as u32);
                 shell.sides += 1;
                 shell.consistent &= self.corner_label(c0) == shell.label;
-                // Signed volume of the cone from the origin, with the side's own
+                // Signed volume of the cone from the shell's apex, with the side's own
                 // orientation (its normal points into the region it faces).
+                let o = apex[side_shell[s] as usize];
                 let [a, b, c] =
-                    [c0, c0.next(), c0.prev()].map(|c| self.position(self.corner_vertex(c)));
+                    [c0, c0.next(), c0.prev()].map(|c| self.position(self.corner_vertex(c)) - o);
                 shell.volume -= a.dot(b.cross(c)) / 6.0;
                 shell.area += 0.5 * (b - a).cross(c - a).length();
                 shell.closed &= [c0, c0.next(), c0.prev()]
@@ -294,6 +304,29 @@ mod census_tests {
             RegionCensus::of(&LabeledMesh::new()).events_since(&one),
             (0, 0)
         );
+    }
+
+    /// A shell's volume does not depend on where the mesh sits: a 1 × 2 × 3 box 10⁶ and
+    /// 10⁹ from the origin measures 6 to 1e-9 (cones from the origin lost several digits
+    /// there: 10⁹ gives cones of 10¹⁸ summing to 6).
+    #[test]
+    fn a_shell_far_from_the_origin_keeps_its_volume() {
+        for offset in [0.0, 1e6, 1e9] {
+            let o = DVec3::new(offset, -0.7 * offset, 0.3 * offset);
+            let m = crate::generators::cuboid(
+                o + DVec3::new(0.1, 0.2, 0.3),
+                o + DVec3::new(1.1, 2.2, 3.3),
+                [Label::new(0), Label::new(1)],
+            )
+            .unwrap();
+            let r = m.regions();
+            let inside = r.shells.iter().find(|s| s.label == Label::new(1)).unwrap();
+            assert!(
+                (inside.volume - 6.0).abs() < 1e-9,
+                "{offset}: {}",
+                inside.volume
+            );
+        }
     }
 
     /// Every side lies in one shell, shells are numbered by their lowest side, each holds
