@@ -176,10 +176,16 @@ fn split_t_junctions_counted(
                 tests += 1;
                 let v = on_open[i as usize];
                 let p = positions[v as usize];
-                let (x, xa, xb) = (p[axis], pa[axis], pb[axis]);
-                let between = x > xa.min(xb) + slack && x < xa.max(xb) - slack;
-                if v != a && v != b && between && on_segment(pa, pb, p, slack) {
-                    on.push(((x - xa).abs(), v));
+                let (x, lo, hi) = (p[axis], pa[axis].min(pb[axis]), pa[axis].max(pb[axis]));
+                if v == a || v == b || x <= lo || x >= hi {
+                    return;
+                }
+                // Strictly between the ends; by more than the slack when only near the
+                // segment (an exactly collinear vertex splits at any distance, as before).
+                let exact = collinear(pa, pb, p);
+                let inside = x > lo + slack && x < hi - slack;
+                if exact || (inside && near_line(pa, pb, p, slack)) {
+                    on.push(((x - pa[axis]).abs(), v));
                 }
             });
             if on.is_empty() {
@@ -229,11 +235,8 @@ const T_SLACK_OF_MAGNITUDE: f64 = 1.0 / (1u32 << 17) as f64;
 /// See [`t_vertex_slack`].
 const T_SLACK_OF_LENGTH: f64 = 1e-3;
 
-/// Whether `p` lies on the line through `pa` and `pb`: exactly, or within `slack` of it.
-fn on_segment(pa: DVec3, pb: DVec3, p: DVec3, slack: f64) -> bool {
-    if collinear(pa, pb, p) {
-        return true;
-    }
+/// Whether `p` lies within `slack` of the line through `pa` and `pb`.
+fn near_line(pa: DVec3, pb: DVec3, p: DVec3, slack: f64) -> bool {
     let d = pb - pa;
     let t = (p - pa).dot(d) / d.length_squared();
     (pa + d * t).distance(p) <= slack
@@ -427,6 +430,13 @@ mod tests {
             assert_eq!(split_t_junctions(&p, &mut tris, None), 1, "{off}");
             assert!(open_edges(&tris).is_empty());
         }
+        // Exactly on the edge a ten-millionth from its end: split, as by the exact test
+        // alone (the slack's margin from the ends is only for vertices near the edge).
+        let (mut p, mut tris) = cube_with_t_junction();
+        let m = p.len() - 1;
+        p[m].x = 1e-7;
+        assert_eq!(split_t_junctions(&p, &mut tris, None), 1);
+        assert!(open_edges(&tris).is_empty());
         // A thousandth of the edge off it: a gap in the surface, not a rounding; left
         // open for validation to report.
         let (mut p, mut tris) = cube_with_t_junction();
