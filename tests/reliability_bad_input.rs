@@ -249,7 +249,7 @@ fn indices_out_of_range_name_face_and_index() {
     let obj = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n";
     let e = read_obj(&obj[..], &ReadOptions::default()).unwrap_err();
     assert!(
-        matches!(e.kind, IoErrorKind::IndexOutOfRange { index: 8, .. }),
+        matches!(e.kind, IoErrorKind::IndexOutOfRange { index: 9, .. }),
         "{e}"
     );
     let e = read_obj(&b"v 0 0 0\nf 1 -2 1\n"[..], &ReadOptions::default()).unwrap_err();
