@@ -195,18 +195,18 @@ fn bbox_centre(mesh: &LabeledMesh) -> DVec3 {
 /// mean edge length, which such a mesh makes infinite or zero, and the run would then
 /// stop on a time step the user never gave instead of on the mesh.
 fn check_range(mesh: &LabeledMesh) -> Result<(), String> {
-    let mut extent = 0.0f64;
-    for v in mesh.vertices() {
+    if let Some(v) = mesh
+        .vertices()
+        .find(|&v| !within_max_coordinate(mesh.position(v)))
+    {
         let p = mesh.position(v);
-        if !within_max_coordinate(p) {
-            return Err(format!(
-                "the mesh's vertex {v} is at ({:e}, {:e}, {:e}): coordinates must be finite and at most 2^100 ≈ 1.3e30 \
-                 in magnitude (rescale the mesh)",
-                p.x, p.y, p.z
-            ));
-        }
-        extent = extent.max(p.abs().max_element());
+        return Err(format!(
+            "the mesh's vertex {v} is at ({:e}, {:e}, {:e}): coordinates must be finite and at most 2^100 ≈ 1.3e30 \
+             in magnitude (rescale the mesh)",
+            p.x, p.y, p.z
+        ));
     }
+    let extent = mesh_core::validate::coordinate_extent(mesh);
     if below_min_extent(extent) {
         return Err(format!(
             "the mesh's largest coordinate magnitude is {extent:e}, below 2^-100 ≈ 7.9e-31 \

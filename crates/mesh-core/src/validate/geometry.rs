@@ -107,16 +107,23 @@ impl CoordinateRange {
     }
 }
 
-/// The [`CoordinateRange`] of `mesh`: one parallel pass over its live finite positions.
+/// The [`CoordinateRange`] of `mesh`.
 pub(super) fn coordinate_range(mesh: &LabeledMesh) -> CoordinateRange {
+    CoordinateRange {
+        tiny: below_min_extent(coordinate_extent(mesh)),
+    }
+}
+
+/// The mesh's size as the range bounds measure it: the largest magnitude of any
+/// coordinate of its live finite vertices (0 for an empty mesh). One parallel pass; what
+/// [`crate::predicates::below_min_extent`] is asked about, here and by callers that check
+/// a mesh's range before handing it on.
+pub fn coordinate_extent(mesh: &LabeledMesh) -> f64 {
     let positions = mesh.positions();
-    let extent = (0..positions.len())
+    (0..positions.len())
         .into_par_iter()
         .with_min_len(CHUNK)
         .filter(|&v| mesh.is_vertex_alive(VertexId::new(v as u32)) && positions[v].is_finite())
         .map(|v| positions[v].abs().max_element())
-        .reduce(|| 0.0, f64::max);
-    CoordinateRange {
-        tiny: below_min_extent(extent),
-    }
+        .reduce(|| 0.0, f64::max)
 }

@@ -37,6 +37,7 @@ pub(crate) mod testmesh;
 #[cfg(test)]
 mod tests;
 
+pub use geometry::coordinate_extent;
 pub use intersections::{any_intersection, triangles_intersect};
 pub use report::{
     BoundaryEdge, CornerTableError, DanglingReference, InconsistentEdge, Listed, SameLabel,
