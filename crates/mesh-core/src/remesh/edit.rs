@@ -15,7 +15,7 @@ use crate::mesh::LabeledMesh;
 
 use super::attributes::{Blend, VertexAttributes};
 use super::guard::{EditGuard, Veto};
-use super::structure::{StructureFault, StructureScratch, check_structure};
+use super::structure::{MovesOnly, StructureFault, StructureScratch, check_structure};
 
 /// A vertex an edit's new triangles refer to: an existing one or one the edit adds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -234,6 +234,27 @@ pub(crate) fn apply_snap_edit(
 /// with [`super::structure::blame_moves`].
 pub(crate) fn check_batch_structure(mesh: &LabeledMesh, edit: &Edit) -> Result<(), StructureFault> {
     STRUCTURE.with_borrow_mut(|s| check_structure(mesh, edit, s))
+}
+
+/// Runs `f`, which must change `mesh` by vertex moves only, inside a moves-only scope of
+/// the structural check ([`MovesOnly`]: small-component floods are remembered). The scope
+/// is left however `f` ends, a panic included, so no stamp outlives it.
+pub(crate) fn with_moves_only<R>(
+    mesh: &mut LabeledMesh,
+    f: impl FnOnce(&mut LabeledMesh) -> R,
+) -> R {
+    struct Leave(Option<MovesOnly>);
+    impl Drop for Leave {
+        fn drop(&mut self) {
+            if let Some(scope) = self.0.take() {
+                STRUCTURE.with_borrow_mut(|s| scope.leave(s));
+            }
+        }
+    }
+    let _leave = Leave(Some(
+        STRUCTURE.with_borrow_mut(|s| MovesOnly::enter(s, mesh)),
+    ));
+    f(mesh)
 }
 
 thread_local! {

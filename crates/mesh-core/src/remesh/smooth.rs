@@ -24,7 +24,9 @@ use crate::ids::{Label, VertexId};
 use crate::mesh::LabeledMesh;
 
 use super::attributes::VertexAttributes;
-use super::edit::{Edit, EditError, VertexMove, apply_edit, check_batch_structure, commit_guarded};
+use super::edit::{
+    Edit, EditError, VertexMove, apply_edit, check_batch_structure, commit_guarded, with_moves_only,
+};
 use super::features::{self, FeatureParams, VertexKind};
 use super::guard::EditGuard;
 use super::structure::blame_moves;
@@ -151,6 +153,18 @@ const MAX_GUARD_ROUNDS: usize = 4;
 /// per batch instead of one per move. Of `params`, the local checks read
 /// `min_normal_cos` and `max_volume_change`.
 pub fn commit_moves(
+    mesh: &mut LabeledMesh,
+    attrs: &mut VertexAttributes,
+    guard: &mut dyn EditGuard,
+    params: &SmoothParams,
+    proposals: &[Proposal],
+) -> SmoothOutcome {
+    with_moves_only(mesh, |mesh| {
+        commit_moves_in(mesh, attrs, guard, params, proposals)
+    })
+}
+
+fn commit_moves_in(
     mesh: &mut LabeledMesh,
     attrs: &mut VertexAttributes,
     guard: &mut dyn EditGuard,

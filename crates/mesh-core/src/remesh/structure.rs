@@ -130,9 +130,54 @@ pub(crate) struct StructureScratch {
     /// The last flood's stamp in `flooded`.
     epoch: u32,
     seeds: Vec<TriId>,
+    /// Per triangle slot, `large_epoch` when a flood found its component larger than
+    /// [`SMALL_COMPONENT`] inside the current moves-only scope ([`MovesOnly`]).
+    large: Vec<u32>,
+    /// Bumped on entering and leaving a scope and by every edit that removes or adds
+    /// triangles, so a stamp is only ever read back under the connectivity it was made in.
+    large_epoch: u32,
+    /// The mesh (by address) of the innermost moves-only scope on this thread.
+    moves_only: Option<usize>,
+}
+
+/// A stretch of work in which the mesh at `mesh` changes only by vertex moves (a
+/// smoothing pass), so the triangles' edge-connected components do not change: a move
+/// reorders the triangles around a non-manifold edge but keeps them all linked to each
+/// other. Inside it, [`check_small_components`] remembers which triangles lie in
+/// components too large to invert and does not flood them again (one flood of up to
+/// [`SMALL_COMPONENT`] triangles per move was an eighth of a smoothing pass).
+///
+/// Why keyed by the mesh's address and bumped at both ends: the scratch is per thread,
+/// and while a scope waits on a parallel loop, rayon may run another block's job on the
+/// same thread; its checks see a different address and neither read nor write the
+/// stamps, and its own scope's end invalidates them.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct MovesOnly {
+    previous: Option<usize>,
+}
+
+impl MovesOnly {
+    pub(crate) fn enter(s: &mut StructureScratch, mesh: &LabeledMesh) -> Self {
+        let previous = s.moves_only.replace(std::ptr::from_ref(mesh) as usize);
+        s.bump_large_epoch();
+        Self { previous }
+    }
+
+    pub(crate) fn leave(self, s: &mut StructureScratch) {
+        s.moves_only = self.previous;
+        s.bump_large_epoch();
+    }
 }
 
 impl StructureScratch {
+    fn bump_large_epoch(&mut self) {
+        if self.large_epoch == u32::MAX {
+            self.large.fill(0);
+            self.large_epoch = 0;
+        }
+        self.large_epoch += 1;
+    }
+
     fn key(&self, r: VertexRef) -> u32 {
         match r {
             VertexRef::Old(v) => v.raw(),
@@ -339,6 +384,14 @@ fn check_small_components(
     edit: &Edit,
     s: &mut StructureScratch,
 ) -> Result<(), StructureFault> {
+    let moves_only = edit.remove_tris.is_empty() && edit.add_tris.is_empty();
+    if !moves_only {
+        s.bump_large_epoch();
+    }
+    let cached = moves_only && s.moves_only == Some(std::ptr::from_ref(mesh) as usize);
+    if cached && s.large.len() < mesh.triangle_capacity() {
+        s.large.resize(mesh.triangle_capacity(), 0);
+    }
     let mut component = std::mem::take(&mut s.component);
     let mut seeds = std::mem::take(&mut s.seeds);
     seeds.clear();
@@ -360,12 +413,17 @@ fn check_small_components(
     let first = s.epoch + 1;
     let mut result = Ok(());
     for &seed in &seeds {
-        if s.flooded[seed.idx()] >= first {
+        if s.flooded[seed.idx()] >= first || (cached && s.large[seed.idx()] == s.large_epoch) {
             continue;
         }
         s.epoch += 1;
         let small = small_component(mesh, seed, &mut s.flooded, s.epoch, &mut component);
         if !small {
+            if cached {
+                for &t in &component {
+                    s.large[t.idx()] = s.large_epoch;
+                }
+            }
             continue;
         }
         let origin = mesh.position(mesh.tri(component[0])[0]);
@@ -683,5 +741,57 @@ mod tests {
             .expect("a collapse that keeps the component's orientation is allowed");
         assert_eq!(m.num_triangles(), 18);
         assert!(placed(&m));
+    }
+
+    /// The moves-only scope remembers large components, never small ones, and never
+    /// carries what it learnt on one mesh over to another.
+    #[test]
+    fn moves_only_scope_still_refuses_turning_a_small_component_inside_out() {
+        use crate::remesh::attributes::VertexAttributes;
+        use crate::remesh::edit::{EditError, VertexMove, apply_edit, with_moves_only};
+        use crate::remesh::guard::NoGuard;
+        let labels = [Label::new(0), Label::new(1)];
+        let tetra = || {
+            let p = vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z];
+            let tris = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
+            LabeledMesh::from_raw(p, &tris, &[[0, 1]; 4]).expect("tetrahedron")
+        };
+        let shift = |m: &LabeledMesh, v: VertexId, d: DVec3| Edit {
+            moves: vec![VertexMove {
+                vertex: v,
+                end: m.position(v) + d,
+                blend: None,
+            }],
+            ..Edit::default()
+        };
+        let through_base = DVec3::new(0.1, 0.1, -2.0);
+        let sphere = crate::generators::icosphere(2, DVec3::new(5.0, 0.0, 0.0), 1.0, labels)
+            .expect("sphere");
+        let mut m = LabeledMesh::disjoint_union(&[sphere.clone(), tetra()]).expect("union");
+        let apex = VertexId::new(sphere.num_vertices() as u32 + 3);
+        with_moves_only(&mut m, |m| {
+            let mut none = VertexAttributes::none();
+            // Twice on the sphere (the second check reads the stamps), then the droplet.
+            for _ in 0..2 {
+                let edit = shift(m, VertexId::new(0), DVec3::splat(1e-3));
+                apply_edit(m, &mut none, &mut NoGuard, &edit).expect("a small move");
+            }
+            let edit = shift(m, apex, through_base);
+            let err = apply_edit(m, &mut none, &mut NoGuard, &edit).expect_err("inverts");
+            assert!(
+                matches!(err, EditError::Structure(StructureFault::Inverts { .. })),
+                "{err}"
+            );
+
+            // Another mesh checked inside this scope (rayon may run another block's job
+            // here): its triangle 0 is small although the scope's triangle 0 is large.
+            let mut other = tetra();
+            let edit = shift(&other, VertexId::new(3), through_base);
+            let err = apply_edit(&mut other, &mut none, &mut NoGuard, &edit).expect_err("inverts");
+            assert!(
+                matches!(err, EditError::Structure(StructureFault::Inverts { .. })),
+                "{err}"
+            );
+        });
     }
 }
