@@ -48,7 +48,7 @@ use mesh_core::{LabeledMesh, RegionCensus, StepReport, TrackError, VertexId, che
 use rayon::prelude::*;
 
 use crate::guard::{CollisionGuard, CollisionGuardOptions};
-use crate::merge::{MergeOptions, snap_merge_from};
+use crate::merge::{MergeOptions, snap_merge_uncounted};
 use crate::params::StepValidation;
 use crate::relax::{RelaxOptions, relax_walls};
 use crate::resolve::{ResolveOptions, resolve_step};
@@ -141,7 +141,7 @@ pub(crate) fn advance_mesh(
     let mut snapped: Vec<VertexId> = recent_snaps.to_vec();
     if let Some(options) = &config.merge {
         let clock = Instant::now();
-        snap_merge_from(&mut work, &mut motion, options, &mut guard, &mut snapped).map_err(
+        snap_merge_uncounted(&mut work, &mut motion, options, &mut guard, &mut snapped).map_err(
             |e| TrackError::StageFailed {
                 stage: "merge",
                 reason: e.to_string(),
