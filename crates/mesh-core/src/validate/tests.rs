@@ -119,6 +119,29 @@ fn repeated_vertex_is_degenerate_not_zero_area() {
     assert!(!r.is_valid());
 }
 
+/// A "book": `pages` triangles on the spine v0–v1, page `i` ending at vertex `2 + i % 7`
+/// (so pages repeat every 7), with every page's id listed against the lowest id of its
+/// vertex set. Above the pairwise degree the sort path must list exactly the pairs, in
+/// the order, that comparing every pair lists.
+#[test]
+fn duplicates_on_one_edge_of_high_degree_are_each_paired_with_the_lowest() {
+    for pages in [5u32, 40, 2000] {
+        let mut p = vec![DVec3::ZERO, DVec3::X];
+        for k in 0..7 {
+            let a = std::f64::consts::TAU * k as f64 / 7.0;
+            p.push(DVec3::new(0.5, a.cos(), a.sin()));
+        }
+        let tris: Vec<[u32; 3]> = (0..pages).map(|i| [0, 1, 2 + i % 7]).collect();
+        let labels = vec![[0, 1]; tris.len()];
+        let mesh = build((p, tris, labels));
+        let r = validate(&mesh, &ValidateOptions::default());
+        let expected: Vec<[TriId; 2]> = (7..pages).map(|i| [t(i % 7), t(i)]).collect();
+        assert_eq!(r.duplicates.count, expected.len(), "{pages} pages");
+        let listed = r.duplicates.items.len();
+        assert_eq!(r.duplicates.items, expected[..listed], "{pages} pages");
+    }
+}
+
 #[test]
 fn duplicate_triangles_in_any_orientation() {
     let (p, mut tris, mut labels) = tetra(DVec3::ZERO, 1);

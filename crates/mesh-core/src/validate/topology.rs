@@ -140,24 +140,51 @@ fn duplicate_degenerates(mut keys: Vec<DegenerateKey>) -> Vec<[TriId; 2]> {
 /// Duplicates among the non-degenerate triangles of one edge group. A triangle
 /// `a < b < c` is seen once, at its edge `{a, b}` (the one whose third vertex exceeds
 /// the edge's higher vertex); two triangles there with the same third vertex have the same
-/// vertex set. Each is paired with the lowest id of its set. O(m²) in the edge degree m,
-/// which is tiny.
+/// vertex set. Each is paired with the lowest id of its set, in group order.
+///
+/// Why two ways: an edge usually has two to four triangles, where comparing every pair is
+/// cheapest and allocates nothing; but a hostile file (one triangle repeated a million
+/// times, a "book" of pages on one spine) puts them all on one edge, and the pairwise
+/// scan took half an hour there. Above [`PAIRWISE_DEGREE`] the lowest id per third vertex
+/// comes from one sort.
 fn duplicates_at_edge(group: &[EdgeIncidence], tris: &[[VertexId; 3]], out: &mut Vec<[TriId; 2]>) {
     let third = |e: &EdgeIncidence| tris[e.tri.idx()][e.slot as usize];
     let counts = |e: &EdgeIncidence| third(e) > e.hi && !is_degenerate(tris[e.tri.idx()]);
+    if group.len() <= PAIRWISE_DEGREE {
+        for e in group.iter().filter(|e| counts(e)) {
+            let c = third(e);
+            let first = group
+                .iter()
+                .filter(|f| counts(f) && third(f) == c)
+                .map(|f| f.tri)
+                .min()
+                .unwrap_or(e.tri);
+            if first != e.tri {
+                out.push([first, e.tri]);
+            }
+        }
+        return;
+    }
+    // (third vertex, lowest triangle id with it), sorted by third vertex.
+    let mut lowest: Vec<(VertexId, TriId)> = group
+        .iter()
+        .filter(|e| counts(e))
+        .map(|e| (third(e), e.tri))
+        .collect();
+    lowest.sort_unstable();
+    lowest.dedup_by_key(|x| x.0);
     for e in group.iter().filter(|e| counts(e)) {
         let c = third(e);
-        let first = group
-            .iter()
-            .filter(|f| counts(f) && third(f) == c)
-            .map(|f| f.tri)
-            .min()
-            .unwrap_or(e.tri);
+        let i = lowest.partition_point(|x| x.0 < c);
+        let first = lowest[i].1;
         if first != e.tri {
             out.push([first, e.tri]);
         }
     }
 }
+
+/// Edge degree up to which [`duplicates_at_edge`] compares every pair.
+const PAIRWISE_DEGREE: usize = 16;
 
 /// Per-edge scan: boundary edges, non-manifold count, duplicates, and the stored
 /// opposite pointers against the pairing recomputed from the radial order. Every corner
