@@ -21,6 +21,7 @@ use glam::DVec3;
 use mesh_core::generators;
 use mesh_core::predicates::{below_min_extent, within_max_coordinate};
 use mesh_core::remesh::improve::mean_edge_length;
+use mesh_core::validate::{ValidateOptions, validate};
 use mesh_core::{Label, LabeledMesh};
 use surftrack::grid_tracker::thinnest_shell;
 
@@ -231,6 +232,21 @@ pub fn build(
         return Err(spec.error("the mesh has no triangles".into()));
     }
     check_range(&mesh).map_err(|m| spec.error(m))?;
+    // Layers 1–3 before placement, which assumes them: an open sheet or a flattened
+    // solid was reported as "a part nested in another" with a remedy that cannot help.
+    let structure = validate(
+        &mesh,
+        &ValidateOptions {
+            placement: false,
+            ..ValidateOptions::default()
+        },
+    );
+    if !structure.is_valid() {
+        return Err(spec.error(format!(
+            "the mesh is not a valid labelled surface (`surftrack validate FILE` lists \
+             every fault): {structure}"
+        )));
+    }
     // Before any splitting (up to millions of triangles): the trackers refuse a part
     // whose outside label is not the material it lies in, and `fix` is the remedy.
     if let Some(m) = mesh_core::placement::misplaced_shells(&mesh).first() {
@@ -407,6 +423,37 @@ mod tests {
             .to_string();
         assert!(message.contains("lies in material 1"), "{message}");
         assert!(message.contains("surftrack fix"), "{message}");
+    }
+
+    /// A structurally broken mesh is refused with what validation finds (an open sheet's
+    /// boundary edges, a flattened solid's zero-area triangles), not as "a part nested in
+    /// another" from the placement check that assumes a valid surface.
+    #[test]
+    fn an_invalid_mesh_is_an_error_naming_its_faults_not_placement() {
+        let l = |i| mesh_core::Label::new(i);
+        let sheet = LabeledMesh::from_raw(
+            vec![DVec3::ZERO, DVec3::X, DVec3::Y],
+            &[[0, 1, 2]],
+            &[[0, 1]],
+        )
+        .unwrap();
+        let mut flat = mesh_core::generators::icosphere(1, DVec3::ZERO, 1.0, [l(0), l(1)]).unwrap();
+        for v in flat.vertices().collect::<Vec<_>>() {
+            let p = flat.position(v);
+            flat.set_position(v, DVec3::new(p.x, p.y, 0.0));
+        }
+        for (mesh, expect) in [(sheet, "boundary edges"), (flat, "zero-area triangles")] {
+            let o = SceneOptions {
+                mesh: Some(mesh),
+                ..SceneOptions::default()
+            };
+            let message = build("normal", &o, &FlowOptions::default())
+                .err()
+                .expect("refused")
+                .to_string();
+            assert!(message.contains(expect), "{message}");
+            assert!(!message.contains("nested"), "{message}");
+        }
     }
 
     /// A mesh too large or too small for the predicates is refused naming the mesh (its
