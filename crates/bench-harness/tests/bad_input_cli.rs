@@ -114,6 +114,18 @@ fn unreadable_inputs_exit_2_with_the_problem_named() {
             b"v 0 \xff\xfe 0\n".to_vec(),
             vec!["line 1", "cannot parse"],
         ),
+        // Files that read without error but hold no triangle: validate called them valid
+        // and convert wrote an empty mesh.
+        (
+            "points.obj",
+            b"# a point cloud\nv 0 0 0\nv 1 0 0\nv 0 1 0\n".to_vec(),
+            vec!["no triangles", "3 vertices"],
+        ),
+        (
+            "no_faces.ply",
+            format!("{}{VERTS}", HEADER.replace("face 4", "face 0")).into_bytes(),
+            vec!["no triangles", "4 vertices"],
+        ),
     ];
     for (name, bytes, needles) in &cases {
         let path = write(d, name, bytes);

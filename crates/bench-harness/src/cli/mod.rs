@@ -619,9 +619,7 @@ pub struct ConvertArgs {
 /// ([`mesh_core::io::ReadOptions::stitch`]: the per-face vertices of STL-style exports,
 /// the T-junctions of CAD exports), and stderr says how many. `validate` and `convert`
 /// read files as they are.
-fn read_work_mesh(
-    path: &std::path::Path,
-) -> Result<mesh_core::LabeledMesh, mesh_core::io::IoError> {
+fn read_work_mesh(path: &std::path::Path) -> anyhow::Result<mesh_core::LabeledMesh> {
     let options = mesh_core::io::ReadOptions {
         stitch: true,
         ..Default::default()
@@ -643,7 +641,25 @@ fn read_work_mesh(
             report.t_junction_vertices
         );
     }
+    if let Some(refusal) = no_triangles(path, &mesh) {
+        anyhow::bail!(refusal);
+    }
     Ok(mesh)
+}
+
+/// The refusal of a file that read without error but holds no triangle: every command
+/// works on surfaces, and such a file is almost always another format under the wrong
+/// extension, or cut short, so `validate` calling it "valid" and `convert` writing an
+/// empty mesh hid the mistake.
+fn no_triangles(path: &std::path::Path, mesh: &mesh_core::LabeledMesh) -> Option<String> {
+    (mesh.num_triangles() == 0).then(|| {
+        format!(
+            "{}: no triangles in the file ({} vertices read): not a surface mesh, or not in \
+             the format its extension names",
+            path.display(),
+            mesh.num_vertices()
+        )
+    })
 }
 
 /// Writes a mesh by extension; PLY is ASCII unless `binary`.

@@ -76,14 +76,19 @@ fn stitch_hint(stitchable: &ReadReport) -> Option<String> {
 }
 
 pub(super) fn run(args: &ValidateArgs) -> anyhow::Result<ExitCode> {
-    let mesh = match mesh_core::io::read_mesh(&args.file) {
+    let read = mesh_core::io::read_mesh(&args.file).map_err(|e| e.to_string());
+    let read = read.and_then(|mesh| match super::no_triangles(&args.file, &mesh) {
+        Some(refusal) => Err(refusal),
+        None => Ok(mesh),
+    });
+    let mesh = match read {
         Ok(mesh) => mesh,
         Err(err) => {
             let stitchable = stitchable(&args.file);
             if args.json {
                 let record = serde_json::json!({
                     "file": args.file.display().to_string(),
-                    "error": err.to_string(),
+                    "error": err,
                     "stitchable_vertices": stitchable.stitched_vertices,
                     "t_junction_vertices": stitchable.t_junction_vertices,
                     "valid": false,
