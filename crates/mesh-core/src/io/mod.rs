@@ -4,7 +4,8 @@
 //! (`.ply` or `.obj`, any case); [`read_ply`], [`write_ply`], [`read_obj`], [`write_obj`]
 //! work on any reader or writer (in-memory buffers for tests and fuzzers). Errors are
 //! [`IoError`]s naming the file and the element, index and line at fault; no input makes
-//! these functions panic.
+//! these functions panic. Text (OBJ, ASCII PLY data, PLY headers) may end its lines with
+//! `\n`, `\r\n` or a lone `\r`, mixed freely; line numbers count each ending once.
 //!
 //! # Labels in PLY
 //!

@@ -91,6 +91,24 @@ usemtl label_2_0\nf 1/1/1 3//1 2/1 # a comment\nf -4/1 -3 -1\nusemtl label_2_0\n
 }
 
 #[test]
+fn every_line_ending_convention_reads_the_same_mesh() {
+    // A lone `\r` (old Mac) used to end no line: the whole file was one `v` line.
+    let text = format!("{TET}usemtl label_0_1\n{OUTWARD}");
+    let expected = read(&text).unwrap().to_raw();
+    for ending in ["\r\n", "\r"] {
+        let converted = text.replace('\n', ending);
+        assert_eq!(read(&converted).unwrap().to_raw(), expected, "{ending:?}");
+    }
+    // Line numbers in errors count each ending once, whatever the mix.
+    let mixed = "v 0 0 0\rv 1 0 0\r\nv 0 1 0\n\rf 1 2 x\r";
+    assert!(
+        matches!(err(mixed), IoErrorKind::BadValue { at, .. } if at == face(0, 5)),
+        "{:?}",
+        err(mixed)
+    );
+}
+
+#[test]
 fn malformed_obj_errors_name_the_line() {
     assert!(matches!(err(""), IoErrorKind::Empty));
     assert!(matches!(err("  \n\t\n"), IoErrorKind::Empty));

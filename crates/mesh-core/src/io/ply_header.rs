@@ -160,6 +160,10 @@ pub(crate) fn parse_header(bytes: &[u8]) -> Result<Header, IoErrorKind> {
         Some((_, b"ply")) => {}
         _ => return Err(IoErrorKind::BadMagic),
     }
+    // A header written with lone `\r` endings ends with `end_header\r`; if binary data then
+    // starts with the byte 0x0A, the line splitter would take it for the `\n` of a `\r\n`.
+    // The magic line says which ending the writer used.
+    let cr_only = lines.last_ending() == b"\r";
     let mut encoding = None;
     let mut elements: Vec<ElementDecl> = Vec::new();
     let mut last_line = 1;
@@ -236,10 +240,14 @@ pub(crate) fn parse_header(bytes: &[u8]) -> Result<Header, IoErrorKind> {
             Some("end_header") => {
                 let encoding =
                     encoding.ok_or_else(|| bad(number, "no `format` line before `end_header`"))?;
+                let mut data_start = lines.offset();
+                if cr_only && encoding != Encoding::Ascii && lines.last_ending() == b"\r\n" {
+                    data_start -= 1;
+                }
                 return Ok(Header {
                     encoding,
                     elements,
-                    data_start: lines.offset(),
+                    data_start,
                     data_line: lines.next_number(),
                 });
             }

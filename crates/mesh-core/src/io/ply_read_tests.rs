@@ -80,6 +80,38 @@ property list uchar int texcoord\nproperty char label_front\nend_header\n";
 }
 
 #[test]
+fn reads_every_line_ending_convention() {
+    let text = ascii(HEAD, VERTS, FACES);
+    let expected = read(&text).unwrap().to_raw();
+    let text = String::from_utf8(text).unwrap();
+    for ending in ["\r\n", "\r"] {
+        let converted = text.replace('\n', ending);
+        assert_eq!(read(converted.as_bytes()).unwrap().to_raw(), expected);
+        // Line numbers stay right: the third face is line 18.
+        let bad = converted.replace("3 1 2 3 0 1", "3 1 2 9 0 1");
+        assert!(matches!(err(bad.as_bytes()),
+            IoErrorKind::IndexOutOfRange { at: l, .. } if l == at(Element::Face, 2, Some(18))));
+    }
+    // A `\r`-only header before binary data whose first byte is 0x0A (`\n`): that byte is
+    // data, not the end of a `\r\n`.
+    let head = "ply\rformat binary_little_endian 1.0\relement vertex 3\rproperty uchar flags\r\
+property float x\rproperty float y\rproperty float z\relement face 1\r\
+property list uchar int vertex_indices\rend_header\r";
+    let mut b = Bin(head.as_bytes().to_vec());
+    for (x, y) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)] {
+        b = b.u8(b'\n').f32(x).f32(y).f32(0.0);
+    }
+    let b = b.u8(3).u32(0).u32(1).u32(2);
+    let assume = ReadOptions {
+        unlabeled: Unlabeled::AssumeOutward,
+        ..ReadOptions::default()
+    };
+    let (p, t, _) = ply_from_bytes(&b.0, &assume).unwrap().to_raw();
+    assert_eq!(p, vec![DVec3::ZERO, DVec3::X, DVec3::Y]);
+    assert_eq!(t, vec![[0, 1, 2]]);
+}
+
+#[test]
 fn skips_unknown_properties_and_elements_in_binary() {
     let head = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty list uchar short n\n\
 property float y\nproperty float z\nelement edge 1\nproperty int a\nproperty list uchar uint b\n\

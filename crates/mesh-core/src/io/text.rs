@@ -5,11 +5,17 @@
 //! stray non-UTF-8 byte in an OBJ comment costs nothing (only tokens that must be numbers
 //! are required to be ASCII).
 
-/// Lines of a byte buffer with their 1-based numbers; `\n` and `\r\n` endings are removed.
+/// Lines of a byte buffer with their 1-based numbers. A line ends at `\n`, `\r\n` or a lone
+/// `\r` (old Mac files; a `\r\r\n` written by a doubled text-mode conversion counts as two
+/// lines, as editors show it). The ending is removed. Splitting on `\n` alone would leave a
+/// `\r`-only file as one line whose values the tokenizer (which treats `\r` as whitespace)
+/// runs together, so a reader would silently take the first record and ignore the rest.
 pub(crate) struct Lines<'a> {
     bytes: &'a [u8],
     pos: usize,
     number: u64,
+    /// Length of the last line's ending (0 at the end of the input, 1 or 2).
+    ending: usize,
 }
 
 impl<'a> Lines<'a> {
@@ -24,10 +30,11 @@ impl<'a> Lines<'a> {
             bytes,
             pos: pos.min(bytes.len()),
             number,
+            ending: 0,
         }
     }
 
-    /// Byte offset just after the last line returned (its `\n` included).
+    /// Byte offset just after the last line returned (its ending included).
     pub(crate) fn offset(&self) -> usize {
         self.pos
     }
@@ -35,6 +42,12 @@ impl<'a> Lines<'a> {
     /// The number the next line will get.
     pub(crate) fn next_number(&self) -> u64 {
         self.number
+    }
+
+    /// The ending of the last line returned: `b"\n"`, `b"\r\n"`, `b"\r"`, or empty if the
+    /// input ended without one.
+    pub(crate) fn last_ending(&self) -> &'a [u8] {
+        &self.bytes[self.pos - self.ending..self.pos]
     }
 }
 
@@ -44,14 +57,15 @@ impl<'a> Iterator for Lines<'a> {
     #[inline]
     fn next(&mut self) -> Option<(u64, &'a [u8])> {
         let rest = self.bytes.get(self.pos..).filter(|r| !r.is_empty())?;
-        let (mut line, advance) = match rest.iter().position(|&b| b == b'\n') {
-            Some(end) => (&rest[..end], end + 1),
-            None => (rest, rest.len()),
+        let (line, ending) = match rest.iter().position(|&b| b == b'\n' || b == b'\r') {
+            Some(end) if rest[end] == b'\r' && rest.get(end + 1) == Some(&b'\n') => {
+                (&rest[..end], 2)
+            }
+            Some(end) => (&rest[..end], 1),
+            None => (rest, 0),
         };
-        if let [head @ .., b'\r'] = line {
-            line = head;
-        }
-        self.pos += advance;
+        self.ending = ending;
+        self.pos += line.len() + ending;
         let number = self.number;
         self.number += 1;
         Some((number, line))
@@ -152,6 +166,27 @@ mod tests {
         assert_eq!(lines.next(), Some((4, &b"last"[..])));
         assert_eq!(lines.next(), None);
         assert_eq!(lines.offset(), text.len());
+    }
+
+    #[test]
+    fn a_lone_carriage_return_ends_a_line() {
+        let text = b"v 0 0 0\rv 1 0 0\r\n\rf 1 2 3\r\r\nx\n";
+        let mut lines = Lines::new(text);
+        let mut next = || {
+            let line = lines.next();
+            (line, lines.last_ending(), lines.offset())
+        };
+        assert_eq!(next(), (Some((1, &b"v 0 0 0"[..])), &b"\r"[..], 8));
+        assert_eq!(next(), (Some((2, &b"v 1 0 0"[..])), &b"\r\n"[..], 17));
+        assert_eq!(next(), (Some((3, &b""[..])), &b"\r"[..], 18));
+        assert_eq!(next(), (Some((4, &b"f 1 2 3"[..])), &b"\r"[..], 26));
+        assert_eq!(next(), (Some((5, &b""[..])), &b"\r\n"[..], 28));
+        assert_eq!(next(), (Some((6, &b"x"[..])), &b"\n"[..], 30));
+        assert_eq!(next(), (None, &b"\n"[..], 30));
+        let mut unterminated = Lines::new(b"a\rb");
+        unterminated.next();
+        assert_eq!(unterminated.next(), Some((2, &b"b"[..])));
+        assert_eq!(unterminated.last_ending(), b"");
     }
 
     #[test]
