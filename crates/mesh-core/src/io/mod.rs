@@ -28,10 +28,10 @@
 //! lines. The reader assigns each face the pair of the last `usemtl label_F_B` before it;
 //! material names starting with `label_` are reserved and must have that form. Other
 //! material names, `g`, `o`, `s`, `vt`, `vn`, `mtllib` and unknown keywords are ignored,
-//! as are extra values on `v` lines (`w`, colours) and the texture/normal parts of face
-//! tokens (`v/vt/vn`). Negative (relative) indices are resolved; faces must be triangles
-//! (`l` and `p` lines are rejected as non-triangular faces). Line continuations (`\`)
-//! are not supported. Either every face has a label or none has
+//! as are extra numbers on `v` lines (`w`, colours; anything else there is an error) and
+//! the texture/normal parts of face tokens (`v/vt/vn`). Negative (relative) indices are
+//! resolved; faces must be triangles (`l` and `p` lines are rejected as non-triangular
+//! faces). Line continuations (`\`) are not supported. Either every face has a label or none has
 //! ([`IoErrorKind::MixedLabels`]).
 //!
 //! The OBJ reader is hand-written rather than `tobj`: `tobj` splits a file into one model

@@ -119,7 +119,20 @@ pub(crate) fn parse_obj(bytes: &[u8]) -> Result<RawMesh, IoErrorKind> {
                         });
                     }
                 }
-                // Extra values (`w`, vertex colours) are ignored.
+                // Extra values (`w`, vertex colours) are ignored, but they must be numbers:
+                // two records run together by a line ending the splitter missed (`v 0 0 0
+                // v 1 0 0`) then fail here instead of losing the second. Their count is not
+                // capped: exporters write 4 (`w`), 6 or 7 (colours) and some more, and a
+                // missed ending always brings a keyword, which this check catches anyway.
+                if let Some(tok) = tokens
+                    .take_while(|t| !t.starts_with(b"#"))
+                    .find(|t| parse_float(t).is_none())
+                {
+                    return Err(IoErrorKind::BadValue {
+                        at: at(),
+                        token: shown(tok),
+                    });
+                }
                 positions.push(DVec3::from_array(p));
             }
             b"f" | b"l" | b"p" => {

@@ -157,6 +157,11 @@ fn malformed_obj_errors_name_the_line() {
             "v 0 0 0\nv 0 y 0\n",
             |e| matches!(e, IoErrorKind::BadValue { at, .. } if *at == Location::element(Element::Vertex, 1, Some(2))),
         ),
+        // Two records on one line (a line ending lost) must not pass as extra values.
+        (
+            "v 0 0 0 1 # w\nv 0 0 0 1 0 0 v 1 1 1\n",
+            |e| matches!(e, IoErrorKind::BadValue { at, token } if *at == Location::element(Element::Vertex, 1, Some(2)) && token == "v"),
+        ),
         (
             "v 0 0 0\nv 0 NaN 0\n",
             |e| matches!(e, IoErrorKind::NonFinite { value, .. } if value.is_nan()),
