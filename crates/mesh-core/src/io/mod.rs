@@ -5,7 +5,8 @@
 //! work on any reader or writer (in-memory buffers for tests and fuzzers). Errors are
 //! [`IoError`]s naming the file and the element, index and line at fault; no input makes
 //! these functions panic. Text (OBJ, ASCII PLY data, PLY headers) may end its lines with
-//! `\n`, `\r\n` or a lone `\r`, mixed freely; line numbers count each ending once.
+//! `\n`, `\r\n` or a lone `\r`, mixed freely; line numbers count each ending once. A
+//! leading UTF-8 byte-order mark is skipped.
 //!
 //! # Labels in PLY
 //!
@@ -31,8 +32,8 @@
 //! as are extra numbers on `v` lines (`w`, colours; anything else there is an error) and
 //! the texture/normal parts of face tokens (`v/vt/vn`). Negative (relative) indices are
 //! resolved; faces must be triangles (`l` and `p` lines are rejected as non-triangular
-//! faces). Line continuations (`\`) are not supported. Either every face has a label or none has
-//! ([`IoErrorKind::MixedLabels`]).
+//! faces). Line continuations (`\`) are not supported. Either every face has a label or
+//! none has ([`IoErrorKind::MixedLabels`]).
 //!
 //! The OBJ reader is hand-written rather than `tobj`: `tobj` splits a file into one model
 //! per material with vertices renumbered per model (so vertices shared by two label groups

@@ -7,7 +7,7 @@ use glam::DVec3;
 
 use super::error::{Element, IoError, IoErrorKind, Location, shown};
 use super::ply_write::check_finite;
-use super::text::{Lines, Tokens, is_blank, parse_float, parse_int};
+use super::text::{Lines, Tokens, is_blank, parse_float, parse_int, strip_bom};
 use super::{RawMesh, ReadOptions};
 use crate::LabeledMesh;
 use crate::ids::MAX_INDEX;
@@ -86,6 +86,7 @@ fn vertex_of(token: &[u8], seen: usize) -> Result<(i64, i64), BadCorner> {
 
 /// Parses a whole OBJ file into arrays.
 pub(crate) fn parse_obj(bytes: &[u8]) -> Result<RawMesh, IoErrorKind> {
+    let bytes = strip_bom(bytes);
     if is_blank(bytes) {
         return Err(IoErrorKind::Empty);
     }

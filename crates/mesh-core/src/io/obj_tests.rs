@@ -109,6 +109,16 @@ fn every_line_ending_convention_reads_the_same_mesh() {
 }
 
 #[test]
+fn a_utf8_byte_order_mark_is_skipped() {
+    // The mark used to hide the first `v`, so a face later pointed past the last vertex.
+    let text = format!("{TET}usemtl label_0_1\n{OUTWARD}");
+    let expected = read(&text).unwrap().to_raw();
+    assert_eq!(read(&format!("\u{feff}{text}")).unwrap().to_raw(), expected);
+    // A mark alone is an empty file.
+    assert!(matches!(err("\u{feff}"), IoErrorKind::Empty));
+}
+
+#[test]
 fn malformed_obj_errors_name_the_line() {
     assert!(matches!(err(""), IoErrorKind::Empty));
     assert!(matches!(err("  \n\t\n"), IoErrorKind::Empty));

@@ -13,7 +13,7 @@ use glam::DVec3;
 
 use super::error::{Element, IoError, IoErrorKind, Location, shown};
 use super::ply_header::{ElementDecl, Encoding, Header, PropKind, Scalar, parse_header};
-use super::text::{Lines, Tokens, is_blank, parse_float, parse_int};
+use super::text::{Lines, Tokens, is_blank, parse_float, parse_int, strip_bom};
 use super::{RawMesh, ReadOptions};
 use crate::LabeledMesh;
 use crate::error::MeshError;
@@ -185,6 +185,8 @@ fn compile(header: &Header, bytes_left: u64) -> Result<(Vec<Plan<'_>>, bool), Io
 
 /// Parses a whole PLY file into arrays.
 pub(crate) fn parse_ply(bytes: &[u8]) -> Result<RawMesh, IoErrorKind> {
+    // Offsets (`data_start`, binary positions) are relative to the text after the mark.
+    let bytes = strip_bom(bytes);
     let header = parse_header(bytes)?;
     let bytes_left = (bytes.len() - header.data_start) as u64;
     let (plans, labelled) = compile(&header, bytes_left)?;

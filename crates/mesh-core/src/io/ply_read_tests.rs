@@ -112,6 +112,21 @@ property list uchar int vertex_indices\rend_header\r";
 }
 
 #[test]
+fn a_utf8_byte_order_mark_is_skipped() {
+    // The mark used to hide the magic `ply`.
+    let text = ascii(HEAD, VERTS, FACES);
+    let expected = read(&text).unwrap().to_raw();
+    let with_mark = [&b"\xEF\xBB\xBF"[..], &text].concat();
+    assert_eq!(read(&with_mark).unwrap().to_raw(), expected);
+    // Binary data is found where the header says, counted after the mark.
+    let mut buf = b"\xEF\xBB\xBF".to_vec();
+    let mesh = crate::io::test_meshes::two_tets();
+    write_ply(&mesh, &mut buf, PlyFormat::BinaryLittleEndian).unwrap();
+    crate::io::test_meshes::assert_same_raw(&mesh, &read(&buf).unwrap());
+    assert!(matches!(err(b"\xEF\xBB\xBF"), IoErrorKind::Empty));
+}
+
+#[test]
 fn skips_unknown_properties_and_elements_in_binary() {
     let head = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty list uchar short n\n\
 property float y\nproperty float z\nelement edge 1\nproperty int a\nproperty list uchar uint b\n\

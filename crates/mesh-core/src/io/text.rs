@@ -111,6 +111,13 @@ impl<'a> Iterator for Tokens<'a> {
     }
 }
 
+/// `bytes` without a leading UTF-8 byte-order mark. Windows editors write one; left in place
+/// it sticks to the first keyword (`\u{feff}v`, `\u{feff}ply`), which then goes unrecognised:
+/// an OBJ loses its first vertex (and fails later on an index out of range), a PLY its magic.
+pub(crate) fn strip_bom(bytes: &[u8]) -> &[u8] {
+    bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes)
+}
+
 /// True if the line holds only whitespace.
 #[inline]
 pub(crate) fn is_blank(line: &[u8]) -> bool {
