@@ -144,6 +144,24 @@ pub enum IoErrorKind {
     /// The input holds no data (or only whitespace).
     #[error("file is empty")]
     Empty,
+    /// Data read as OBJ starts with the PLY magic line `ply`. Refused rather than read as
+    /// PLY: the format follows the extension (or the reader called) everywhere, writing
+    /// included, so a mislabelled file is a mix-up upstream that the user should see and
+    /// fix by renaming, not a guess this reader should make.
+    #[error("this is a PLY file (it starts with `ply`), not OBJ: rename it to .ply")]
+    PlyInObj,
+    /// An OBJ line starts with a number. Unknown OBJ keywords are ignored, but no keyword
+    /// is a number: such a line means the data is not OBJ (or a line break went missing).
+    #[error("{at}: starts with the number {token:?}, which is no OBJ keyword")]
+    NotObjLine {
+        /// The line.
+        at: Location,
+        /// The first token (shortened).
+        token: String,
+    },
+    /// An OBJ file holds neither `v` nor `f` lines: whatever it is, it describes no mesh.
+    #[error("no `v` or `f` lines: nothing to read as an OBJ mesh")]
+    NoGeometry,
     /// The input does not start with the line `ply`.
     #[error("not a PLY file: the first line must be `ply`")]
     BadMagic,

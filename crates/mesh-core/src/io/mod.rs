@@ -33,7 +33,11 @@
 //! the texture/normal parts of face tokens (`v/vt/vn`). Negative (relative) indices are
 //! resolved; faces must be triangles (`l` and `p` lines are rejected as non-triangular
 //! faces). Line continuations (`\`) are not supported. Either every face has a label or
-//! none has ([`IoErrorKind::MixedLabels`]).
+//! none has ([`IoErrorKind::MixedLabels`]). Unknown keywords are skipped, but no keyword
+//! is a number: a line starting with one is an error ([`IoErrorKind::NotObjLine`]), and so
+//! are data starting with the PLY magic `ply` ([`IoErrorKind::PlyInObj`]) and a file with
+//! neither `v` nor `f` lines ([`IoErrorKind::NoGeometry`]), which would otherwise read as an
+//! empty mesh. Vertices without faces are read (a point set).
 //!
 //! The OBJ reader is hand-written rather than `tobj`: `tobj` splits a file into one model
 //! per material with vertices renumbered per model (so vertices shared by two label groups

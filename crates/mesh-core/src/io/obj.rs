@@ -90,6 +90,14 @@ pub(crate) fn parse_obj(bytes: &[u8]) -> Result<RawMesh, IoErrorKind> {
     if is_blank(bytes) {
         return Err(IoErrorKind::Empty);
     }
+    // Unknown keywords are skipped, so a PLY file would otherwise read as an empty mesh.
+    let first = Lines::new(bytes)
+        .map(|(_, text)| text)
+        .find(|t| !is_blank(t));
+    if first.is_some_and(|t| t.trim_ascii() == b"ply") {
+        return Err(IoErrorKind::PlyInObj);
+    }
+    let mut geometry_lines = false;
     let mut positions: Vec<DVec3> = Vec::new();
     let mut tris: Vec<[u32; 3]> = Vec::new();
     let mut labels: Vec<[u32; 2]> = Vec::new();
@@ -103,6 +111,7 @@ pub(crate) fn parse_obj(bytes: &[u8]) -> Result<RawMesh, IoErrorKind> {
         };
         match keyword {
             b"v" => {
+                geometry_lines = true;
                 let at = || Location::element(Element::Vertex, positions.len() as u64, Some(line));
                 let mut p = [0.0; 3];
                 for value in &mut p {
@@ -137,6 +146,7 @@ pub(crate) fn parse_obj(bytes: &[u8]) -> Result<RawMesh, IoErrorKind> {
                 positions.push(DVec3::from_array(p));
             }
             b"f" | b"l" | b"p" => {
+                geometry_lines = true;
                 let at = || Location::element(Element::Face, tris.len() as u64, Some(line));
                 let corners = tokens.clone().take_while(|t| !t.starts_with(b"#"));
                 let arity = corners.clone().count();
@@ -184,9 +194,19 @@ pub(crate) fn parse_obj(bytes: &[u8]) -> Result<RawMesh, IoErrorKind> {
                     .unwrap_or_default();
                 current = label_of_material(name.trim_ascii_end(), line)?;
             }
+            // No keyword is a number: ASCII PLY data, a point list, or a lost line break.
+            [b'0'..=b'9' | b'+' | b'-' | b'.', ..] if parse_float(keyword).is_some() => {
+                return Err(IoErrorKind::NotObjLine {
+                    at: Location::line(line),
+                    token: shown(keyword),
+                });
+            }
             // Comments, groups, objects, smoothing, texture/normal data, unknown keywords.
             _ => {}
         }
+    }
+    if !geometry_lines {
+        return Err(IoErrorKind::NoGeometry);
     }
     let vertex_count = positions.len();
     if vertex_count > MAX_INDEX as usize {

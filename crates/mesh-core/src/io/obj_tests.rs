@@ -119,6 +119,42 @@ fn a_utf8_byte_order_mark_is_skipped() {
 }
 
 #[test]
+fn what_is_not_obj_is_refused_not_read_as_empty() {
+    // A PLY file given to the OBJ reader used to read as 0 vertices and 0 triangles.
+    let ply = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n\
+property float z\nend_header\n0 0 0\n";
+    assert!(matches!(err(ply), IoErrorKind::PlyInObj));
+    assert!(matches!(
+        err(&format!("\u{feff}\r\n  ply \r{TET}")),
+        IoErrorKind::PlyInObj
+    ));
+    // A line starting with a number is no OBJ, even among known keywords.
+    for (text, line, token) in [
+        ("0 0 0\n", 1, "0"),
+        ("v 0 0 0\n\n-1.5e3 x\n", 3, "-1.5e3"),
+        ("# c\n.5\n", 2, ".5"),
+    ] {
+        match err(text) {
+            IoErrorKind::NotObjLine { at, token: t } => {
+                assert_eq!((at, t.as_str()), (Location::line(line), token), "{text:?}")
+            }
+            e => panic!("{text:?} gave {e:?}"),
+        }
+    }
+    // Nothing geometric at all is an error; vertices without faces (a point set) are not,
+    // nor are unknown keywords that are words.
+    for text in ["# nothing\n# here\n", "mtllib a.mtl\no x\nvt 0 0\n"] {
+        assert!(matches!(err(text), IoErrorKind::NoGeometry), "{text:?}");
+    }
+    let assume = ReadOptions {
+        unlabeled: Unlabeled::AssumeOutward,
+        ..ReadOptions::default()
+    };
+    let points = obj_from_bytes(b"v 0 0 0\ncstype bezier\nv 1 0 0\n", &assume).unwrap();
+    assert_eq!((points.num_vertices(), points.num_triangles()), (2, 0));
+}
+
+#[test]
 fn malformed_obj_errors_name_the_line() {
     assert!(matches!(err(""), IoErrorKind::Empty));
     assert!(matches!(err("  \n\t\n"), IoErrorKind::Empty));
