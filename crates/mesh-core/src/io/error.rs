@@ -135,6 +135,10 @@ pub enum IoErrorKind {
     /// A directory was given where a file was expected.
     #[error("is a directory, not a file")]
     IsDirectory,
+    /// The path (symlinks followed) is a device, FIFO or socket, not a regular file: reading
+    /// `/dev/zero` would fill memory without end, a FIFO could block forever.
+    #[error("is not a regular file (a device, FIFO or socket)")]
+    NotRegularFile,
     /// The file name does not end in `.ply` or `.obj` (case-insensitive).
     #[error("unknown mesh format extension {extension:?} (expected .ply or .obj)")]
     UnknownExtension {

@@ -84,7 +84,7 @@ mod fuzz_tests;
 pub(crate) mod test_meshes;
 
 use std::fs::File;
-use std::io::BufWriter;
+use std::io::{BufWriter, Read};
 use std::path::Path;
 
 use glam::DVec3;
@@ -170,7 +170,8 @@ pub fn read_mesh(path: &Path) -> Result<LabeledMesh, IoError> {
     read_mesh_with(path, &ReadOptions::default())
 }
 
-/// Reads a `.ply` or `.obj` file (chosen by extension, case-insensitive).
+/// Reads a `.ply` or `.obj` file (chosen by extension, case-insensitive). The path must
+/// lead, symlinks followed, to a regular file ([`IoErrorKind::NotRegularFile`] otherwise).
 pub fn read_mesh_with(path: &Path, options: &ReadOptions) -> Result<LabeledMesh, IoError> {
     read_mesh_reported(path, options).map(|(mesh, _)| mesh)
 }
@@ -181,16 +182,42 @@ pub fn read_mesh_reported(
     options: &ReadOptions,
 ) -> Result<(LabeledMesh, ReadReport), IoError> {
     let format = MeshFormat::from_path(path)?;
-    if path.is_dir() {
-        return Err(IoError::at_path(path, IoErrorKind::IsDirectory));
-    }
-    let bytes = std::fs::read(path).map_err(|e| IoError::at_path(path, IoErrorKind::Io(e)))?;
+    let bytes = read_regular_file(path)?;
     match format {
         MeshFormat::Ply => ply_read::parse_ply(&bytes),
         MeshFormat::Obj => obj::parse_obj(&bytes),
     }
     .and_then(|raw| raw.into_mesh(options))
     .map_err(|kind| IoError::at_path(path, kind))
+}
+
+/// Reads the whole file at `path`, refusing anything but a regular file (symlinks followed):
+/// `/dev/zero` would fill memory without end, a FIFO or terminal could block forever. The
+/// check comes before opening, because opening a FIFO already blocks until a writer appears,
+/// and again on the opened handle, in case the path was replaced in between. There is no
+/// size cap (real meshes run to several GB): a file memory cannot hold fails as an
+/// out-of-memory I/O error when its size is reserved, before anything is read.
+fn read_regular_file(path: &Path) -> Result<Vec<u8>, IoError> {
+    let error = |kind| IoError::at_path(path, kind);
+    let check = |meta: std::fs::Metadata| {
+        if meta.is_dir() {
+            Err(error(IoErrorKind::IsDirectory))
+        } else if !meta.is_file() {
+            Err(error(IoErrorKind::NotRegularFile))
+        } else {
+            Ok(meta.len())
+        }
+    };
+    check(std::fs::metadata(path).map_err(|e| error(IoErrorKind::Io(e)))?)?;
+    let mut file = File::open(path).map_err(|e| error(IoErrorKind::Io(e)))?;
+    let len = check(file.metadata().map_err(|e| error(IoErrorKind::Io(e)))?)?;
+    let mut bytes = Vec::new();
+    bytes
+        .try_reserve_exact(usize::try_from(len).unwrap_or(usize::MAX))
+        .map_err(|_| error(IoErrorKind::Io(std::io::ErrorKind::OutOfMemory.into())))?;
+    file.read_to_end(&mut bytes)
+        .map_err(|e| error(IoErrorKind::Io(e)))?;
+    Ok(bytes)
 }
 
 /// Writes a `.ply` (binary little-endian) or `.obj` file, chosen by extension.
@@ -326,6 +353,17 @@ mod tests {
             write_mesh(&mesh, &as_dir).unwrap_err().kind,
             IoErrorKind::IsDirectory
         ));
+
+        // Devices are refused before reading (`/dev/zero` used to fill memory), by the path
+        // a symlink points to.
+        #[cfg(unix)]
+        for (name, device) in [("null.ply", "/dev/null"), ("zero.obj", "/dev/zero")] {
+            let link = dir.path().join(name);
+            std::os::unix::fs::symlink(device, &link).unwrap();
+            let e = read_mesh(&link).unwrap_err();
+            assert!(matches!(e.kind, IoErrorKind::NotRegularFile), "{e}");
+            assert!(e.to_string().contains(name), "{e}");
+        }
 
         let missing = dir.path().join("nowhere").join("x.obj");
         let e = write_mesh(&mesh, &missing).unwrap_err();
