@@ -242,6 +242,13 @@ pub enum IoErrorKind {
         /// The offending text (shortened).
         token: String,
     },
+    /// An ASCII PLY value does not fit the integer type its property declares (257 in a
+    /// `uchar`, 2.5 in an `int`). Binary values fit by construction; text must too, or a
+    /// file would mean something else once written back in binary.
+    /// Boxed: it is the largest kind and rare, and every `Result` carrying an error pays for
+    /// the largest one.
+    #[error("{0}")]
+    ValueOutOfType(Box<TypeMismatch>),
     /// A face does not have exactly three vertices.
     #[error("{at}: face has {vertices} vertices; only triangles are supported")]
     NonTriangle {
@@ -307,6 +314,20 @@ pub enum IoErrorKind {
     /// The arrays read are not a valid [`crate::LabeledMesh`] (e.g. too many elements).
     #[error("{0}")]
     Mesh(#[source] MeshError),
+}
+
+/// A value that does not fit its declared PLY type ([`IoErrorKind::ValueOutOfType`]).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{at}: property `{property}` is declared {ty} but holds {value}, which does not fit")]
+pub struct TypeMismatch {
+    /// The element.
+    pub at: Location,
+    /// The property (for a list, its count or items).
+    pub property: String,
+    /// The declared type, as PLY names it (`uchar`, `int`, …).
+    pub ty: &'static str,
+    /// The value as written (shortened).
+    pub value: String,
 }
 
 /// An error reading or writing a mesh: which file, and what went wrong where.

@@ -16,6 +16,9 @@
 //! into. Vertices need `x y z` (any scalar type; written as `double`); faces need a list
 //! `vertex_indices` (or `vertex_index`) of any integer types, with exactly three entries.
 //! Other properties and elements are skipped, `comment` and `obj_info` lines ignored.
+//! ASCII values that are read (integer-typed coordinates, list counts, indices, labels) must
+//! fit their declared type ([`IoErrorKind::ValueOutOfType`]), as binary ones do by
+//! construction; skipped scalar values are not parsed.
 //! Binary big-endian is read and written too. Anything after the last element of an ASCII
 //! file is ignored; leftover bytes after a binary file's last element are an error
 //! ([`IoErrorKind::TrailingData`]), because they mean the header does not describe the data.
@@ -89,7 +92,7 @@ use std::path::Path;
 
 use glam::DVec3;
 
-pub use error::{EdgeProblem, Element, IoError, IoErrorKind, Location, MEMORY};
+pub use error::{EdgeProblem, Element, IoError, IoErrorKind, Location, MEMORY, TypeMismatch};
 pub use obj::{read_obj, write_obj};
 pub use ply_read::read_ply;
 pub use ply_write::{PlyFormat, write_ply};

@@ -11,8 +11,8 @@ use std::io::Read;
 
 use glam::DVec3;
 
-use super::error::{Element, IoError, IoErrorKind, Location, shown};
-use super::ply_header::{ElementDecl, Encoding, Header, PropKind, Scalar, parse_header};
+use super::error::{Element, IoError, IoErrorKind, Location, TypeMismatch, shown};
+use super::ply_header::{ElementDecl, Encoding, Header, PropKind, Property, Scalar, parse_header};
 use super::text::{Lines, Tokens, is_blank, parse_float, parse_int, strip_bom};
 use super::{RawMesh, ReadOptions};
 use crate::LabeledMesh;
@@ -240,6 +240,13 @@ enum Fail {
     NonTriangle(i64),
     Index(i64),
     Label(i64),
+    /// A text value that does not fit its integer type; `property` is filled in by
+    /// [`Fail::of`] on the way out (empty until then, so nothing is allocated for it).
+    Type {
+        value: String,
+        ty: Scalar,
+        property: String,
+    },
 }
 
 impl Fail {
@@ -257,6 +264,29 @@ impl Fail {
                 vertex_count,
             },
             Fail::Label(value) => IoErrorKind::LabelOutOfRange { at, value },
+            Fail::Type {
+                value,
+                ty,
+                property,
+            } => IoErrorKind::ValueOutOfType(Box::new(TypeMismatch {
+                at,
+                property,
+                ty: ty.name(),
+                value,
+            })),
+        }
+    }
+
+    /// Names the property a type error was found in.
+    #[cold]
+    fn of(self, prop: &Property) -> Fail {
+        match self {
+            Fail::Type { value, ty, .. } => Fail::Type {
+                value,
+                ty,
+                property: prop.name.clone(),
+            },
+            other => other,
         }
     }
 }
@@ -305,15 +335,33 @@ impl Source for AsciiSource<'_> {
     }
 
     #[inline]
-    fn float(&mut self, _: Scalar) -> Result<f64, Fail> {
+    fn float(&mut self, s: Scalar) -> Result<f64, Fail> {
+        if s.is_int() {
+            // An integer-typed coordinate holds what its type holds, as in binary.
+            return self.int(s).map(|v| v as f64);
+        }
         let tok = self.token()?;
         parse_float(tok).ok_or_else(|| Fail::Bad(shown(tok)))
     }
 
+    /// Text can say anything, so the value is checked against the type (binary values fit
+    /// by construction): 257 in a `uchar` label, or a list count beyond its count type,
+    /// would otherwise be taken as written.
     #[inline]
-    fn int(&mut self, _: Scalar) -> Result<i64, Fail> {
+    fn int(&mut self, s: Scalar) -> Result<i64, Fail> {
         let tok = self.token()?;
-        parse_int(tok).ok_or_else(|| Fail::Bad(shown(tok)))
+        let type_error = |value| Fail::Type {
+            value,
+            ty: s,
+            property: String::new(),
+        };
+        match (parse_int(tok), s.int_range()) {
+            (Some(v), Some((min, max))) if v < min || v > max => Err(type_error(v.to_string())),
+            (Some(v), _) => Ok(v),
+            // A number, but not an integer (`2.5`, `1e3`).
+            (None, _) if parse_float(tok).is_some() => Err(type_error(shown(tok))),
+            (None, _) => Err(Fail::Bad(shown(tok))),
+        }
     }
 
     fn skip(&mut self, _: Scalar, n: u64) -> Result<(), Fail> {
@@ -475,7 +523,7 @@ fn skip_property<S: Source>(src: &mut S, kind: PropKind) -> Result<(), Fail> {
 fn skip_element<S: Source>(src: &mut S, plan: &Plan<'_>) -> Result<(), Fail> {
     src.begin()?;
     for prop in &plan.decl.props {
-        skip_property(src, prop.kind)?;
+        skip_property(src, prop.kind).map_err(|f| f.of(prop))?;
     }
     src.end()
 }
@@ -486,15 +534,30 @@ fn read_vertex<S: Source>(src: &mut S, plan: &Plan<'_>) -> Result<DVec3, Fail> {
     let mut p = [0.0; 3];
     for (prop, &role) in plan.decl.props.iter().zip(&plan.roles) {
         match (role, prop.kind) {
-            (Role::Coord(axis), PropKind::Scalar(s)) => p[axis] = src.float(s)?,
-            (_, kind) => skip_property(src, kind)?,
+            (Role::Coord(axis), PropKind::Scalar(s)) => src.float(s).map(|v| p[axis] = v),
+            (_, kind) => skip_property(src, kind),
         }
+        .map_err(|f| f.of(prop))?;
     }
     src.end()?;
     if let Some(&bad) = p.iter().find(|v| !v.is_finite()) {
         return Err(Fail::NonFinite(bad));
     }
     Ok(DVec3::from_array(p))
+}
+
+/// The three entries of a `vertex_indices` list, as written.
+#[inline]
+fn read_indices<S: Source>(src: &mut S, count: Scalar, item: Scalar) -> Result<[i64; 3], Fail> {
+    let n = src.int(count)?;
+    if n != 3 {
+        return Err(Fail::NonTriangle(n));
+    }
+    let mut indices = [0; 3];
+    for index in &mut indices {
+        *index = src.int(item)?;
+    }
+    Ok(indices)
 }
 
 #[inline]
@@ -508,30 +571,28 @@ fn read_face<S: Source>(
     let mut labels = [0u32; 2];
     for (prop, &role) in plan.decl.props.iter().zip(&plan.roles) {
         match (role, prop.kind) {
-            (Role::Indices, PropKind::List { count, item }) => {
-                let n = src.int(count)?;
-                if n != 3 {
-                    return Err(Fail::NonTriangle(n));
-                }
-                for slot in &mut tri {
-                    let index = src.int(item)?;
-                    // vertex_count <= MAX_INDEX (checked in `compile`), so the index fits u32.
-                    match u32::try_from(index) {
-                        Ok(v) if u64::from(v) < vertex_count => *slot = v,
-                        _ => return Err(Fail::Index(index)),
+            (Role::Indices, PropKind::List { count, item }) => read_indices(src, count, item)
+                .and_then(|t| {
+                    // vertex_count <= MAX_INDEX (checked in `compile`), so an index fits u32.
+                    for (slot, index) in tri.iter_mut().zip(t) {
+                        match u32::try_from(index) {
+                            Ok(v) if u64::from(v) < vertex_count => *slot = v,
+                            _ => return Err(Fail::Index(index)),
+                        }
                     }
-                }
-            }
-            (Role::Front | Role::Back, PropKind::Scalar(s)) => {
-                let value = src.int(s)?;
+                    Ok(())
+                }),
+            (Role::Front | Role::Back, PropKind::Scalar(s)) => src.int(s).and_then(|value| {
                 let label = u32::try_from(value)
                     .ok()
                     .filter(|&l| l <= MAX_INDEX)
                     .ok_or(Fail::Label(value))?;
                 labels[usize::from(role == Role::Back)] = label;
-            }
-            (_, kind) => skip_property(src, kind)?,
+                Ok(())
+            }),
+            (_, kind) => skip_property(src, kind),
         }
+        .map_err(|f| f.of(prop))?;
     }
     src.end()?;
     Ok((tri, labels))

@@ -3,7 +3,7 @@
 use glam::DVec3;
 
 use super::*;
-use crate::io::{EdgeProblem, Element, PlyFormat, Unlabeled, write_ply};
+use crate::io::{EdgeProblem, Element, PlyFormat, TypeMismatch, Unlabeled, write_ply};
 
 const HEAD: &str = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
 element face 4\nproperty list uchar int vertex_indices\nproperty int label_front\nproperty int label_back\nend_header\n";
@@ -250,12 +250,17 @@ fn line_value_counts_are_checked() {
     let bad = FACES.replace("3 1 2 3 0 1", "3 1 2.0 3 0 1");
     assert!(matches!(
         err(&ascii(HEAD, VERTS, &bad)),
-        IoErrorKind::BadValue { .. }
+        IoErrorKind::ValueOutOfType(m) if m.ty == "int" && m.value == "2.0"
     ));
     let negative = FACES.replace("3 1 2 3 0 1", "-2 1 2 3 0 1");
+    let signed_count = HEAD.replace("list uchar int", "list char int");
+    assert!(matches!(
+        err(&ascii(&signed_count, VERTS, &negative)),
+        IoErrorKind::NonTriangle { vertices: -2, .. }
+    ));
     assert!(matches!(
         err(&ascii(HEAD, VERTS, &negative)),
-        IoErrorKind::NonTriangle { vertices: -2, .. }
+        IoErrorKind::ValueOutOfType(m) if m.ty == "uchar" && m.property == "vertex_indices"
     ));
 }
 
@@ -267,7 +272,7 @@ fn faces_must_be_triangles_with_indices_in_range() {
     for (bad, index) in [
         ("3 1 2 4 0 1", 4),
         ("3 1 -1 3 0 1", -1),
-        ("3 1 2 99999999999 0 1", 99999999999),
+        ("3 1 2 2147483647 0 1", 2147483647),
     ] {
         let faces = FACES.replace("3 1 2 3 0 1", bad);
         match err(&ascii(HEAD, VERTS, &faces)) {
@@ -289,6 +294,51 @@ fn faces_must_be_triangles_with_indices_in_range() {
         err(&ascii(&head, VERTS, FACES)),
         IoErrorKind::BadHeader { .. }
     ));
+}
+
+#[test]
+fn ascii_values_must_fit_their_declared_type() {
+    // 257 in a `uchar` label used to be read as label 257.
+    let head = HEAD
+        .replace("property int label_front", "property uchar label_front")
+        .replace("property int label_back", "property char label_back")
+        .replace("list uchar int", "list uchar ushort")
+        .replace("property float z", "property short z");
+    let fits = FACES.replace("3 1 2 3 0 1", "3 1 2 3 255 127");
+    assert!(read(&ascii(&head, VERTS, &fits)).is_ok());
+    let cases = [
+        ("3 1 2 3 257 1", "label_front", "uchar", "257"),
+        ("3 1 2 3 0 -129", "label_back", "char", "-129"),
+        ("3 1 2 3 2.5 1", "label_front", "uchar", "2.5"),
+        ("256 1 2 3 0 1", "vertex_indices", "uchar", "256"),
+        ("3 1 2 65536 0 1", "vertex_indices", "ushort", "65536"),
+    ];
+    for (bad, property, ty, value) in cases {
+        let faces = FACES.replace("3 1 2 3 0 1", bad);
+        let e = err(&ascii(&head, VERTS, &faces));
+        let expected = TypeMismatch {
+            at: at(Element::Face, 2, Some(18)),
+            property: property.into(),
+            ty,
+            value: value.into(),
+        };
+        assert!(
+            matches!(&e, IoErrorKind::ValueOutOfType(m) if **m == expected),
+            "{bad}: {e}"
+        );
+    }
+    // An integer-typed coordinate, and the count of a list that is skipped.
+    let verts = VERTS.replace("0 1 0\n", "0 1 40000\n");
+    assert!(matches!(err(&ascii(&head, &verts, FACES)),
+        IoErrorKind::ValueOutOfType(m) if m.at == at(Element::Vertex, 2, Some(14)) && m.property == "z"));
+    let head = HEAD.replace(
+        "end_header",
+        "element extra 1\nproperty list uchar int stuff\nend_header",
+    );
+    assert!(
+        matches!(err(&ascii(&head, VERTS, &format!("{FACES}256 0\n"))),
+        IoErrorKind::ValueOutOfType(m) if m.at == at(Element::Other("extra".into()), 0, Some(22)) && m.property == "stuff")
+    );
 }
 
 #[test]
@@ -334,9 +384,10 @@ fn labels_must_be_both_present_and_in_range() {
         err(&ascii(&float_label, VERTS, FACES)),
         IoErrorKind::BadHeader { .. }
     ));
+    let uint_back = HEAD.replace("property int label_back", "property uint label_back");
     for (bad, value) in [("3 1 2 3 -1 1", -1), ("3 1 2 3 0 4294967295", 4294967295)] {
         let faces = FACES.replace("3 1 2 3 0 1", bad);
-        assert!(matches!(err(&ascii(HEAD, VERTS, &faces)),
+        assert!(matches!(err(&ascii(&uint_back, VERTS, &faces)),
             IoErrorKind::LabelOutOfRange { at: l, value: v } if l == at(Element::Face, 2, Some(18)) && v == value));
     }
     // uint in binary: u32::MAX is out of range (it is no valid label id).
