@@ -227,7 +227,9 @@ pub fn snap_merge_from(
     guard: &mut dyn EditGuard,
     snapped: &mut Vec<VertexId>,
 ) -> Result<MergeReport, MergeError> {
-    check_options(options)?;
+    if !has_work(mesh, options)? {
+        return Ok(MergeReport::default());
+    }
     let shells_before = bounded_shells(mesh);
     let interfaces_before = interfaces(mesh);
     let mut report = snap_merge_uncounted(mesh, attrs, options, guard, snapped)?;
@@ -240,7 +242,8 @@ pub fn snap_merge_from(
     Ok(report)
 }
 
-fn check_options(options: &MergeOptions) -> Result<(), MergeError> {
+/// Checks the options; false when there is nothing to merge (distance 0, empty mesh).
+fn has_work(mesh: &LabeledMesh, options: &MergeOptions) -> Result<bool, MergeError> {
     let d = options.merge_distance;
     if !(d.is_finite() && d >= 0.0) {
         return Err(MergeError::InvalidOption {
@@ -266,7 +269,7 @@ fn check_options(options: &MergeOptions) -> Result<(), MergeError> {
             expected: "a finite, non-negative speed",
         });
     }
-    Ok(())
+    Ok(d > 0.0 && mesh.num_triangles() > 0)
 }
 
 /// [`snap_merge_from`] without its event counts ([`MergeReport::merges`] and
@@ -281,21 +284,9 @@ pub(crate) fn snap_merge_uncounted(
     guard: &mut dyn EditGuard,
     snapped: &mut Vec<VertexId>,
 ) -> Result<MergeReport, MergeError> {
-    check_options(options)?;
-    if options.merge_distance == 0.0 || mesh.num_triangles() == 0 {
+    if !has_work(mesh, options)? {
         return Ok(MergeReport::default());
     }
-    merge_rounds(mesh, attrs, options, guard, snapped)
-}
-
-/// The rounds of snap merging and the pocket closing after them.
-fn merge_rounds(
-    mesh: &mut LabeledMesh,
-    attrs: &mut VertexAttributes,
-    options: &MergeOptions,
-    guard: &mut dyn EditGuard,
-    snapped: &mut Vec<VertexId>,
-) -> Result<MergeReport, MergeError> {
     let d = options.merge_distance;
     let mut report = MergeReport::default();
     let mut reach = SurfaceReach::default();

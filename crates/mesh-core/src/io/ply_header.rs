@@ -96,7 +96,7 @@ impl Scalar {
 
     /// True for the integer types.
     pub(crate) fn is_int(self) -> bool {
-        !matches!(self, Scalar::F32 | Scalar::F64)
+        self.int_range().is_some()
     }
 }
 
