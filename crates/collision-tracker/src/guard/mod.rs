@@ -193,6 +193,12 @@ impl CollisionGuard {
         self.motion.build(mesh, edit);
         let index = self.end_state.index();
         let eps = self.options.min_distance.filter(|&e| e > 0.0);
+        // An edit that only moves vertices sweeps exactly the triangles the proximity test
+        // looks at, and the sweep runs that test itself (see `check_sweep`).
+        let fused = eps.is_some()
+            && edit.only_moves()
+            && !self.motion.swept.is_empty()
+            && self.motion.swept.len() == self.motion.moved_kept.len();
         let result = if self.motion.swept.is_empty() {
             sweep::check_retriangulation(&mut self.scratch, index, mesh, edit, &self.motion)
         } else {
@@ -204,13 +210,14 @@ impl CollisionGuard {
                 &self.motion,
                 &self.options.ccd,
                 eps.unwrap_or(0.0),
+                fused,
             )
         };
         result.and_then(|()| match eps {
-            Some(eps) => {
+            Some(eps) if !fused => {
                 sweep::check_proximity(&mut self.scratch, index, mesh, edit, &self.motion, eps)
             }
-            None => Ok(()),
+            _ => Ok(()),
         })
     }
 }

@@ -184,6 +184,17 @@ const EDGES: [(usize, usize); 3] = [(0, 1), (1, 2), (2, 0)];
 /// CCD of the pseudo-motion, then the swept-tetrahedron test. The pool is gathered for
 /// the swept boxes grown by `margin`, so that [`check_proximity`] with that distance can
 /// reuse it.
+///
+/// `proximity`: also run [`check_proximity`]'s test (distance `margin`) of each swept
+/// triangle on the elements selected for its sweep, for an edit that only moves vertices,
+/// whose swept triangles are exactly the triangles that test looks at
+/// ([`Motion::moved_kept`], in the same order). Why: selecting the static elements near
+/// each triangle a second time was most of that test on smoothing and relaxation moves.
+/// The selection for the sweep is grown by `margin`, which only adds elements the sweep
+/// cannot hit (they lie outside the swept box) and covers the end box grown by `margin`
+/// that the test selects on; a pair found too close is reported only when the whole sweep
+/// is clean, as when the test ran after it.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn check_sweep(
     s: &mut Scratch,
     index: &TriangleIndex,
@@ -192,7 +203,12 @@ pub(crate) fn check_sweep(
     motion: &Motion,
     ccd: &CcdOptions,
     margin: f64,
+    proximity: bool,
 ) -> Result<(), Hit> {
+    debug_assert!(
+        !proximity || (edit.only_moves() && motion.swept.len() == motion.moved_kept.len())
+    );
+    let mut too_close = false;
     let pooled = motion.swept.len() <= MAX_POOLED;
     if pooled {
         let all = motion
@@ -204,10 +220,11 @@ pub(crate) fn check_sweep(
         s.pool_bounds = None;
     }
     for (i, t) in motion.swept.iter().enumerate() {
+        let bounds = t.bounds().inflated(margin);
         if pooled {
-            select(s, &t.bounds());
+            select(s, &bounds);
         } else {
-            gather(s, index, mesh, edit, motion, &t.bounds());
+            gather(s, index, mesh, edit, motion, &bounds);
         }
         // Static vertices against the moving triangle.
         for &(k, p) in &s.vertices {
@@ -287,6 +304,13 @@ pub(crate) fn check_sweep(
                 return Err(Hit::Tunnel);
             }
         }
+        if proximity && !too_close {
+            let verts = mesh.tri(motion.moved_kept[i]).map(VertexRef::Old);
+            too_close = proximity_of(s, mesh, edit, motion, verts, false, margin).is_err();
+        }
+    }
+    if too_close {
+        return Err(Hit::Proximity);
     }
     Ok(())
 }
@@ -437,77 +461,92 @@ pub(crate) fn check_proximity(
         }
     }
     for (verts, added) in changed() {
-        let key = verts.map(|r| motion.key(r));
-        let x1 = verts.map(|r| edit.end_position(mesh, r));
-        let x0 = verts.map(|r| edit.start_position(mesh, r));
-        let bounds = end_bounds(&verts);
         if pooled {
-            select(s, &bounds);
+            select(s, &end_bounds(&verts));
         } else {
-            gather(s, index, mesh, edit, motion, &bounds);
+            gather(s, index, mesh, edit, motion, &end_bounds(&verts));
         }
-        // A pair that started at least as close is the flow's, not the edit's — but only
-        // for elements that existed before the edit. A new element has no meaningful
-        // start: a split vertex starts where it ends, and a flip's new diagonal (nothing
-        // moves) would "start" exactly as close as it ends, so an edit that puts a new
-        // vertex, edge or triangle within `eps` of another element is the edit's doing.
-        let born = verts.map(|r| !matches!(r, VertexRef::Old(_)));
-        let new_tri = added;
-        let new_edge = |a: usize, b: usize| match (verts[a], verts[b]) {
-            (VertexRef::Old(p), VertexRef::Old(q)) => {
-                added && mesh.edge_triangles(p, q).next().is_none()
-            }
-            _ => true,
-        };
-        // Too close at the end, and not already as close at the start (computed only for
-        // the rare pair that is close at the end). Boxes grown by `eps` reject the rest
-        // before any distance is computed: nearly every gathered element is a neighbour
-        // far from the changed triangle but for the vertex it shares.
-        let closer = |d1: f64, d0: &dyn Fn() -> f64, new: bool| d1 < eps && (new || d1 < d0());
-        let near = |a: &[DVec3], b: &[DVec3]| {
-            Aabb::from_points(a)
-                .inflated(eps)
-                .overlaps(&Aabb::from_points(b))
-        };
-        for &(k, p) in &s.vertices {
-            if !key.contains(&k)
-                && near(&[p], &x1)
+        proximity_of(s, mesh, edit, motion, verts, added, eps)?;
+    }
+    Ok(())
+}
+
+/// [`check_proximity`]'s test of one changed triangle (`verts`; `added` when the edit
+/// creates it) against the elements selected in `s` (at least those whose box comes within
+/// `eps` of its end box).
+fn proximity_of(
+    s: &Scratch,
+    mesh: &LabeledMesh,
+    edit: &Edit,
+    motion: &Motion,
+    verts: [VertexRef; 3],
+    added: bool,
+    eps: f64,
+) -> Result<(), Hit> {
+    let key = verts.map(|r| motion.key(r));
+    let x1 = verts.map(|r| edit.end_position(mesh, r));
+    let x0 = verts.map(|r| edit.start_position(mesh, r));
+    // A pair that started at least as close is the flow's, not the edit's — but only
+    // for elements that existed before the edit. A new element has no meaningful
+    // start: a split vertex starts where it ends, and a flip's new diagonal (nothing
+    // moves) would "start" exactly as close as it ends, so an edit that puts a new
+    // vertex, edge or triangle within `eps` of another element is the edit's doing.
+    let born = verts.map(|r| !matches!(r, VertexRef::Old(_)));
+    let new_tri = added;
+    let new_edge = |a: usize, b: usize| match (verts[a], verts[b]) {
+        (VertexRef::Old(p), VertexRef::Old(q)) => {
+            added && mesh.edge_triangles(p, q).next().is_none()
+        }
+        _ => true,
+    };
+    // Too close at the end, and not already as close at the start (computed only for
+    // the rare pair that is close at the end). Boxes grown by `eps` reject the rest
+    // before any distance is computed: nearly every gathered element is a neighbour
+    // far from the changed triangle but for the vertex it shares.
+    let closer = |d1: f64, d0: &dyn Fn() -> f64, new: bool| d1 < eps && (new || d1 < d0());
+    let near = |a: &[DVec3], b: &[DVec3]| {
+        Aabb::from_points(a)
+            .inflated(eps)
+            .overlaps(&Aabb::from_points(b))
+    };
+    for &(k, p) in &s.vertices {
+        if !key.contains(&k)
+            && near(&[p], &x1)
+            && closer(
+                proximity_vertex_triangle(p, x1).distance,
+                &|| proximity_vertex_triangle(p, x0).distance,
+                new_tri,
+            )
+        {
+            return Err(Hit::Proximity);
+        }
+    }
+    for &(skey, q) in &s.near {
+        for j in (0..3).filter(|&j| !skey.contains(&key[j])) {
+            if near(&[x1[j]], &q)
                 && closer(
-                    proximity_vertex_triangle(p, x1).distance,
-                    &|| proximity_vertex_triangle(p, x0).distance,
-                    new_tri,
+                    proximity_vertex_triangle(x1[j], q).distance,
+                    &|| proximity_vertex_triangle(x0[j], q).distance,
+                    born[j],
                 )
             {
                 return Err(Hit::Proximity);
             }
         }
-        for &(skey, q) in &s.near {
-            for j in (0..3).filter(|&j| !skey.contains(&key[j])) {
-                if near(&[x1[j]], &q)
-                    && closer(
-                        proximity_vertex_triangle(x1[j], q).distance,
-                        &|| proximity_vertex_triangle(x0[j], q).distance,
-                        born[j],
-                    )
-                {
-                    return Err(Hit::Proximity);
-                }
+    }
+    for (a, b) in EDGES {
+        for &(ekey, q) in &s.edges {
+            if ekey.contains(&key[a]) || ekey.contains(&key[b]) {
+                continue;
             }
-        }
-        for (a, b) in EDGES {
-            for &(ekey, q) in &s.edges {
-                if ekey.contains(&key[a]) || ekey.contains(&key[b]) {
-                    continue;
-                }
-                if near(&[x1[a], x1[b]], &q)
-                    && closer(
-                        proximity_edge_edge(x1[a], x1[b], q[0], q[1]).distance,
-                        &|| proximity_edge_edge(x0[a], x0[b], q[0], q[1]).distance,
-                        new_edge(a, b),
-                    )
-                {
-                    return Err(Hit::Proximity);
-                }
+            if near(&[x1[a], x1[b]], &q)
+                && closer(
+                    proximity_edge_edge(x1[a], x1[b], q[0], q[1]).distance,
+                    &|| proximity_edge_edge(x0[a], x0[b], q[0], q[1]).distance,
+                    new_edge(a, b),
+                )
+            {
+                return Err(Hit::Proximity);
             }
         }
     }
