@@ -29,6 +29,7 @@ pub mod predicates;
 pub mod regions;
 pub mod remesh;
 pub mod solve;
+pub mod stamps;
 pub mod tracker;
 pub mod triangle_index;
 pub mod union_find;
@@ -40,6 +41,7 @@ pub use glam::DVec3;
 pub use ids::{CornerId, Id, IdVec, Label, TriId, VertexId};
 pub use mesh::{Compaction, LabeledMesh};
 pub use regions::{RegionCensus, RegionShell, Regions};
+pub use stamps::Stamps;
 pub use tracker::{
     ContactChanges, LabelVolume, MaterialCensus, StageTiming, StepReport, SurfaceTracker,
     TopologyEvents, TrackError, check_proposal,

@@ -7,7 +7,7 @@ use mesh_core::TriangleIndex;
 use mesh_core::broadphase::Aabb;
 use mesh_core::predicates::{Sign, orient3d};
 use mesh_core::remesh::{Edit, VertexRef};
-use mesh_core::{LabeledMesh, TriId};
+use mesh_core::{LabeledMesh, Stamps, TriId};
 
 use super::motion::{Motion, Swept};
 use crate::ccd::{CcdOptions, ccd_edge_edge_with, ccd_vertex_triangle_with};
@@ -39,13 +39,11 @@ pub(crate) struct Scratch {
     /// every check over them asks whether *any* element hits).
     pool_vertices: Vec<(u32, DVec3)>,
     pool_edges: Vec<([u32; 2], [DVec3; 2], Aabb)>,
-    /// Per vertex id, the gather that last pooled the vertex ([`Scratch::gathers`]): one
-    /// look tells a repeat, where sorting the pool's vertices and edges to drop repeats
-    /// was 40 % of gathering.
-    pooled_in: Vec<u32>,
-    /// Per triangle slot, the gather whose index query last reported it (likewise).
-    queried_in: Vec<u32>,
-    gathers: u32,
+    /// Per vertex id, pooled in this gather: one look tells a repeat, where sorting the
+    /// pool's vertices and edges to drop repeats was 45 % of gathering.
+    pooled: Stamps,
+    /// Per triangle slot, reported by this gather's index query (likewise).
+    queried: Stamps,
     /// Every pooled triangle's edges as `(packed ends, index into edge_ends)`, sorted to
     /// find the distinct ones (small entries: sorting the edges with their ends and boxes
     /// moved six times the bytes).
@@ -83,26 +81,13 @@ fn gather_pool(
     motion: &Motion,
     bounds: &Aabb,
 ) {
-    s.gathers = s.gathers.wrapping_add(1);
-    if s.gathers == 0 {
-        s.pooled_in.fill(0);
-        s.queried_in.fill(0);
-        s.gathers = 1;
-    }
-    if s.pooled_in.len() < mesh.vertex_capacity() {
-        s.pooled_in.resize(mesh.vertex_capacity(), 0);
-    }
-    if s.queried_in.len() < mesh.triangle_capacity() {
-        s.queried_in.resize(mesh.triangle_capacity(), 0);
-    }
+    s.pooled.next_pass(mesh.vertex_capacity());
+    s.queried.next_pass(mesh.triangle_capacity());
     s.candidates.clear();
     // The index may report a triangle more than once; keep its first report.
-    let (candidates, queried_in, gathers) = (&mut s.candidates, &mut s.queried_in, s.gathers);
+    let (candidates, queried) = (&mut s.candidates, &mut s.queried);
     index.query(bounds, |t| {
-        if let Some(mark) = queried_in.get_mut(t.idx())
-            && *mark != gathers
-        {
-            *mark = gathers;
+        if queried.first_sight(t.idx()) {
             candidates.push(t);
         }
     });
@@ -122,9 +107,7 @@ fn gather_pool(
             let key = mesh.tri(t).map(|v| v.raw());
             s.pool.push(((key, p), b));
             for k in 0..3 {
-                let mark = &mut s.pooled_in[key[k] as usize];
-                if *mark != s.gathers {
-                    *mark = s.gathers;
+                if s.pooled.first_sight(key[k] as usize) {
                     s.pool_vertices.push((key[k], p[k]));
                 }
                 let (i, j) = (k, (k + 1) % 3);

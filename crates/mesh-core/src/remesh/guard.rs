@@ -13,6 +13,7 @@ use crate::broadphase::Aabb;
 use crate::ids::{TriId, VertexId};
 use crate::mesh::LabeledMesh;
 use crate::predicates;
+use crate::stamps::Stamps;
 use crate::triangle_index::TriangleIndex;
 
 use super::edit::{Applied, Edit, VertexRef};
@@ -252,11 +253,9 @@ impl Keyed {
 pub struct StaticIntersectionGuard {
     /// The mesh's triangles, kept current through [`EditGuard::committed`].
     index: TriangleIndex,
-    /// Per triangle slot: the number of the last check that saw it (as a candidate, or as
-    /// a triangle the edit removes or moves), so each is looked at once per check.
-    seen: Vec<u32>,
-    /// Number of the current check (`seen` is cleared when it wraps).
-    epoch: u32,
+    /// Per triangle slot: seen in this check (as a candidate, or as a triangle the edit
+    /// removes or moves), so each is looked at once per check.
+    seen: Stamps,
     /// Scratch buffers, kept to avoid allocation per check.
     moved: Vec<TriId>,
     changed: Vec<Keyed>,
@@ -293,28 +292,15 @@ impl StaticIntersectionGuard {
         &self.index
     }
 
-    /// Starts a check: a fresh epoch, `seen` sized to the mesh.
-    fn next_epoch(&mut self, mesh: &LabeledMesh) {
-        if self.seen.len() < mesh.triangle_capacity() {
-            self.seen.resize(mesh.triangle_capacity(), 0);
-        }
-        self.epoch = self.epoch.wrapping_add(1);
-        if self.epoch == 0 {
-            self.seen.fill(0);
-            self.epoch = 1;
-        }
+    /// Starts a check: every triangle unseen.
+    fn start_check(&mut self, mesh: &LabeledMesh) {
+        self.seen.next_pass(mesh.triangle_capacity());
     }
 
     /// Marks `t` seen in this check; false if it already was.
     #[inline]
     fn first_sight(&mut self, t: TriId) -> bool {
-        match self.seen.get_mut(t.idx()) {
-            Some(s) if *s != self.epoch => {
-                *s = self.epoch;
-                true
-            }
-            _ => false,
-        }
+        self.seen.first_sight(t.idx())
     }
 
     /// Collects, once each, the live triangles (other than those the edit removes or
@@ -323,18 +309,12 @@ impl StaticIntersectionGuard {
         let Self {
             index,
             seen,
-            epoch,
             candidates,
             ..
         } = self;
         let take = |t: TriId| {
-            if let Some(s) = seen.get_mut(t.idx())
-                && *s != *epoch
-            {
-                *s = *epoch;
-                if mesh.is_triangle_alive(t) {
-                    candidates.push(t);
-                }
+            if seen.first_sight(t.idx()) && mesh.is_triangle_alive(t) {
+                candidates.push(t);
             }
         };
         index.query(b, take);
@@ -375,7 +355,7 @@ impl EditGuard for StaticIntersectionGuard {
         if reuses_existing_triangles(mesh, edit) {
             return Ok(());
         }
-        self.next_epoch(mesh);
+        self.start_check(mesh);
         // The edit's own removed and moved triangles are never candidates.
         for &t in &edit.remove_tris {
             self.first_sight(t);
