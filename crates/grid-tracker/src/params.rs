@@ -175,7 +175,7 @@ impl GridParams {
 /// (missing fields take [`ImproveParams::default`]'s values); `null` means improvement off.
 mod improve_serde {
     use mesh_core::remesh::{
-        ConserveVolume, FeatureParams, FlipCriterion, ImproveParams, SeparationParams,
+        ConserveVolume, FeatureParams, FlipCriterion, ImproveParams, Resmooth, SeparationParams,
     };
     use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
@@ -210,6 +210,7 @@ mod improve_serde {
         pinch: bool,
         smooth_step: f64,
         smooth_passes: usize,
+        resmooth: Resmooth,
         flip_criterion: Flip,
         flip_min_improvement: f64,
         min_normal_cos: f64,
@@ -248,6 +249,7 @@ mod improve_serde {
                 pinch: p.pinch,
                 smooth_step: p.smooth_step,
                 smooth_passes: p.smooth_passes,
+                resmooth: p.resmooth,
                 flip_criterion: match p.flip_criterion {
                     FlipCriterion::Delaunay => Flip::Delaunay,
                     FlipCriterion::ShorterEdge => Flip::ShorterEdge,
@@ -285,6 +287,7 @@ mod improve_serde {
                 pinch: m.pinch,
                 smooth_step: m.smooth_step,
                 smooth_passes: m.smooth_passes,
+                resmooth: m.resmooth,
                 flip_criterion: match m.flip_criterion {
                     Flip::Delaunay => FlipCriterion::Delaunay,
                     Flip::ShorterEdge => FlipCriterion::ShorterEdge,

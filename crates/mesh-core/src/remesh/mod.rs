@@ -57,8 +57,8 @@ pub use fence::FenceGuard;
 pub use flip::{FlipCriterion, FlipError, FlipParams, FlipRefusal, flip_edge};
 pub use guard::{EditGuard, NoGuard, StaticIntersectionGuard, Veto, bisect_moves};
 pub use improve::{
-    ConserveVolume, ImproveParams, ImproveRegion, ImproveReport, OpCounts, improve, improve_in,
-    improve_with,
+    ConserveVolume, ImproveParams, ImproveRegion, ImproveReport, OpCounts, Resmooth, improve,
+    improve_in, improve_with,
 };
 pub use pinch::{pinch_singular_vertices, pinch_singular_vertices_in};
 pub use region_graph::{RegionGraph, irregular_vertices};
