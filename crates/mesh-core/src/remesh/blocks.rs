@@ -31,9 +31,8 @@
 //! number of threads. It is not the mesh serial improvement makes (edits happen in another
 //! order), which is why the caller picks a work size below which it stays serial.
 
-use std::collections::HashMap;
-
 use glam::DVec3;
+use rayon::iter::Either;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -433,44 +432,54 @@ fn cut_into_blocks(
         .map(|&v| (lattice.key(mesh.position(v)), v))
         .collect();
     keyed.sort_unstable();
+    // One block per distinct key, in increasing key order: `keys[i]` is block `i`'s.
     let mut blocks: Vec<Block> = Vec::new();
-    let mut index: HashMap<Key, usize> = HashMap::new();
+    let mut keys: Vec<Key> = Vec::new();
     for (k, v) in keyed {
-        let i = *index.entry(k).or_insert_with(|| {
+        if keys.last() != Some(&k) {
             let b = lattice.bounds(k);
+            keys.push(k);
             blocks.push(Block {
                 bounds: Aabb::new(b.min + 0.5 * margin, b.max - 0.5 * margin),
                 tris: Vec::new(),
                 work: Vec::new(),
             });
-            blocks.len() - 1
-        });
-        blocks[i].work.push(v);
+        }
+        blocks.last_mut().expect("pushed above").work.push(v);
     }
+    // Which blocks each triangle reaches, found for all triangles in parallel (a serial
+    // pass with a hashed lookup per spanned block was most of the serial time of a block
+    // pass); collected in triangle order, so every block lists its triangles in
+    // increasing order whatever the thread count.
     let slack = 1e-6 * lattice.side + margin;
-    for t in mesh.triangles() {
-        let b = Aabb::from_points(&mesh.tri_positions(t)).inflated(slack);
-        let (lo, hi) = (lattice.key(b.min), lattice.key(b.max));
-        let span = (0..3).fold(1i128, |n, k| n * (hi[k] as i128 - lo[k] as i128 + 1));
-        if span > blocks.len() as i128 {
-            // A triangle larger than the blocks with work (coarse input, a tiny ℓ): ask
-            // each of those blocks instead of each block the triangle spans.
-            for (k, &i) in &index {
-                if (0..3).all(|a| lo[a] <= k[a] && k[a] <= hi[a]) {
-                    blocks[i].tris.push(t);
-                }
-            }
-            continue;
-        }
-        for x in lo[0]..=hi[0] {
-            for y in lo[1]..=hi[1] {
-                for z in lo[2]..=hi[2] {
-                    if let Some(&i) = index.get(&[x, y, z]) {
-                        blocks[i].tris.push(t);
-                    }
-                }
-            }
-        }
+    let alive = mesh.tri_alive_flags();
+    let keys = &keys[..];
+    let reached: Vec<(u32, TriId)> = (0..mesh.triangle_capacity())
+        .into_par_iter()
+        .with_min_len(4096)
+        .filter(|&t| alive[t])
+        .flat_map_iter(|t| {
+            let t = TriId::new(t as u32);
+            let b = Aabb::from_points(&mesh.tri_positions(t)).inflated(slack);
+            let (lo, hi) = (lattice.key(b.min), lattice.key(b.max));
+            let inside = move |k: &Key| (0..3).all(|a| lo[a] <= k[a] && k[a] <= hi[a]);
+            let span = (0..3).fold(1i128, |n, k| n * (hi[k] as i128 - lo[k] as i128 + 1));
+            let found = if span > keys.len() as i128 {
+                // A triangle larger than the blocks with work (coarse input, a tiny ℓ):
+                // ask each of those blocks instead of each block the triangle spans.
+                Either::Left((0..keys.len()).filter(move |&i| inside(&keys[i])))
+            } else {
+                Either::Right((lo[0]..=hi[0]).flat_map(move |x| {
+                    (lo[1]..=hi[1]).flat_map(move |y| {
+                        (lo[2]..=hi[2]).filter_map(move |z| keys.binary_search(&[x, y, z]).ok())
+                    })
+                }))
+            };
+            found.map(move |i| (i as u32, t))
+        })
+        .collect();
+    for (i, t) in reached {
+        blocks[i as usize].tris.push(t);
     }
     blocks
 }
@@ -594,7 +603,7 @@ fn write_back(
         let st = TriId::new(s as u32);
         !free[s]
             || (sub.is_triangle_alive(st)
-                && sub.tri(st).map(|v| v.idx()) == mesh.tri(tris[s]).map(|g| local_of(&verts, g))
+                && sub.tri(st).map(|v| verts.get(v.idx()).copied()) == mesh.tri(tris[s]).map(Some)
                 && sub.labels(st) == mesh.labels(tris[s]))
     };
     let kept: Vec<bool> = (0..n_tris).map(kept).collect();
@@ -661,10 +670,4 @@ fn write_back(
         }
     }
     next.extend(deferred.iter().map(|v| map[v.idx()]));
-}
-
-/// The local id of global vertex `g` among a block's sorted copied vertices (`usize::MAX`
-/// when it is not one of them, which matches no local id).
-fn local_of(verts: &[VertexId], g: VertexId) -> usize {
-    verts.binary_search(&g).unwrap_or(usize::MAX)
 }
