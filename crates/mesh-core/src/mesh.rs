@@ -565,6 +565,15 @@ impl LabeledMesh {
         self.scratch = group;
     }
 
+    /// True when the edge opposite corner `c` has exactly two triangles: its radial walk
+    /// comes back to `c` in two steps. Such an edge pairs the same way whatever the
+    /// geometry, so no move can mislabel or reorder it.
+    #[inline]
+    pub fn is_two_sided(&self, c: CornerId) -> bool {
+        self.opposite(c)
+            .is_some_and(|o| self.opposite(o.dual()).map(CornerId::dual) == Some(c))
+    }
+
     /// Re-pairs every edge of every triangle incident to `v` from the current geometry:
     /// call after moving `v`, since the radial order around a non-manifold edge depends on
     /// the positions of its ends and of its triangles' third vertices.
@@ -582,11 +591,7 @@ impl LabeledMesh {
                 // Two-triangle edges pair the same way whatever the geometry. The radial
                 // walk tells in two steps (the ring walk of `edge_triangles` took a
                 // vertex's degree); an unpaired corner falls back to the ring.
-                let corner = CornerId::of(c.tri(), Side::Front, k);
-                let manifold = match self.opposite(corner) {
-                    Some(o) => self.opposite(o.dual()).map(CornerId::dual) == Some(corner),
-                    None => false,
-                };
+                let manifold = self.is_two_sided(CornerId::of(c.tri(), Side::Front, k));
                 let (a, b) = (tri[(k + 1) % 3], tri[(k + 2) % 3]);
                 if !manifold && self.edge_triangles(a, b).nth(2).is_some() {
                     self.relink_edge(a, b);

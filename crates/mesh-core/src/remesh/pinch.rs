@@ -21,6 +21,7 @@ use crate::mesh::LabeledMesh;
 use super::attributes::{Blend, VertexAttributes};
 use super::edit::{Edit, NewVertex, VertexMove, VertexRef, apply_edit};
 use super::guard::EditGuard;
+use super::region_graph::has_disk_fan;
 use crate::union_find::{find, union};
 
 /// How far each copy of a pinched vertex moves towards its component's centroid, as a
@@ -97,7 +98,7 @@ pub fn singular_vertices(mesh: &LabeledMesh) -> Vec<VertexId> {
 /// [`singular_vertices`] among `only` (increasing, each once; `None`: every vertex).
 fn singular_vertices_in(mesh: &LabeledMesh, only: Option<&[VertexId]>) -> Vec<VertexId> {
     let singular = |fan: &mut Fan, v: VertexId| {
-        if !mesh.is_vertex_alive(v) {
+        if !mesh.is_vertex_alive(v) || has_disk_fan(mesh, v) {
             return None;
         }
         fan.build(mesh, v);
@@ -246,5 +247,26 @@ mod tests {
         let again = pinch_singular_vertices(&mut mesh, &mut VertexAttributes::none(), &mut NoGuard);
         assert_eq!(again, 0);
         assert_eq!(mesh.to_raw(), after);
+    }
+
+    /// A vertex the disk-fan shortcut skips has one component: the shortcut never hides a
+    /// vertex to pinch.
+    #[test]
+    fn disk_fans_are_one_component() {
+        let mut fan = Fan::default();
+        for mesh in crate::remesh::region_graph::tests::disk_fan_meshes() {
+            for v in mesh.vertices() {
+                fan.build(&mesh, v);
+                if has_disk_fan(&mesh, v) {
+                    assert_eq!(fan.components, 1, "{v}");
+                }
+            }
+            assert!(
+                singular_vertices(&mesh)
+                    .iter()
+                    .all(|&v| !has_disk_fan(&mesh, v))
+            );
+        }
+        assert_eq!(singular_vertices(&bowtie()), vec![VertexId::new(0)]);
     }
 }

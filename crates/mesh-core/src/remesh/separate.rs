@@ -43,7 +43,7 @@ use crate::mesh::LabeledMesh;
 use super::attributes::{Blend, VertexAttributes};
 use super::edit::{Edit, EditError, NewVertex, VertexMove, VertexRef, apply_edit};
 use super::guard::EditGuard;
-use super::region_graph::RegionGraph;
+use super::region_graph::{RegionGraph, has_disk_fan};
 
 /// How strongly the flow wants regions `A` and `B` at a vertex pulled apart along `d`
 /// (unit, pointing from `B` towards `A`). Only positive strengths separate.
@@ -251,7 +251,7 @@ fn find_candidates(
     vertices
         .par_iter()
         .copied()
-        .filter(|&v| mesh.is_vertex_alive(v))
+        .filter(|&v| mesh.is_vertex_alive(v) && !has_disk_fan(mesh, v))
         .map_init(Scratch::default, |s, v| {
             s.graph.build(mesh, v);
             if s.graph.is_complete() {

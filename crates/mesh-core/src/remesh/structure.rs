@@ -196,13 +196,6 @@ impl StructureScratch {
     }
 }
 
-/// True when the edge opposite front corner `c` has exactly two triangles (two steps of
-/// the radial walk), which no change of geometry can mislabel.
-fn two_sided(mesh: &LabeledMesh, c: CornerId) -> bool {
-    mesh.opposite(c)
-        .is_some_and(|o| mesh.opposite(o.dual()).map(CornerId::dual) == Some(c))
-}
-
 /// Checks the end state of a well-formed `edit` ([`Edit::check`]) around everything it
 /// touches (see the module doc).
 pub(crate) fn check_structure(
@@ -280,7 +273,7 @@ pub(crate) fn check_structure(
         for c in mesh.vertex_corners(m.vertex) {
             let tri = mesh.tri(c.tri()).map(VertexRef::Old);
             for k in 0..3 {
-                if !two_sided(mesh, CornerId::of(c.tri(), Side::Front, k)) {
+                if !mesh.is_two_sided(CornerId::of(c.tri(), Side::Front, k)) {
                     s.edges.push([tri[(k + 1) % 3], tri[(k + 2) % 3]]);
                 }
             }
