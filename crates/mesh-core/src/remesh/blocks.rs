@@ -45,7 +45,8 @@ use super::features;
 use super::fence::FenceGuard;
 use super::guard::EditGuard;
 use super::improve::{
-    ImproveParams, ImproveRegion, ImproveReport, improve_part, initial_work, mean_edge_length,
+    ImproveParams, ImproveRegion, ImproveReport, improve_part, initial_work, live_sorted,
+    mean_edge_length,
 };
 use super::separate::AreaDecrease;
 
@@ -226,9 +227,7 @@ fn first_work(
         }
         ImproveRegion::Vertices(v) => v.to_vec(),
     };
-    work.retain(|&v| mesh.is_vertex_alive(v));
-    work.sort_unstable();
-    work.dedup();
+    live_sorted(mesh, &mut work);
     work
 }
 
@@ -411,9 +410,7 @@ fn block_pass<R: Send>(
         reports.push(report);
         write_back(mesh, attrs, editable, block, &mut next);
     }
-    next.retain(|&v| mesh.is_vertex_alive(v));
-    next.sort_unstable();
-    next.dedup();
+    live_sorted(mesh, &mut next);
     (edits, next)
 }
 

@@ -476,13 +476,8 @@ pub(super) fn improve_part(
         ImproveRegion::Whole => None,
         ImproveRegion::Around { seeds, degraded } => Some(run.initial_work(mesh, seeds, degraded)),
         ImproveRegion::Vertices(vertices) => {
-            let mut w: Vec<VertexId> = vertices
-                .iter()
-                .copied()
-                .filter(|&v| mesh.is_vertex_alive(v))
-                .collect();
-            w.sort_unstable();
-            w.dedup();
+            let mut w = vertices.to_vec();
+            live_sorted(mesh, &mut w);
             Some(w)
         }
     };
@@ -659,9 +654,7 @@ impl<'g> Recorder<'g> {
             && self.in_work < self.log.len()
         {
             w.extend_from_slice(&self.log[self.in_work..]);
-            w.par_sort_unstable();
-            w.dedup();
-            w.retain(|&v| mesh.is_vertex_alive(v));
+            live_sorted(mesh, w);
         }
         self.in_work = self.log.len();
     }
@@ -682,9 +675,7 @@ impl<'g> Recorder<'g> {
             Resmooth::Neighbourhood => neighbourhood(mesh, noted),
             Resmooth::Corners => {
                 let mut out = noted.to_vec();
-                out.par_sort_unstable();
-                out.dedup();
-                out.retain(|&v| mesh.is_vertex_alive(v));
+                live_sorted(mesh, &mut out);
                 out
             }
         };
@@ -717,10 +708,16 @@ fn neighbourhood(mesh: &LabeledMesh, vertices: &[VertexId]) -> Vec<VertexId> {
         .filter(|&&v| mesh.is_vertex_alive(v))
         .flat_map_iter(|&v| mesh.vertex_triangles(v).flat_map(|t| mesh.tri(t)))
         .collect();
-    out.par_sort_unstable();
-    out.dedup();
-    out.retain(|&v| mesh.is_vertex_alive(v));
+    live_sorted(mesh, &mut out);
     out
+}
+
+/// Keeps the live vertices of `vertices`, in increasing order, each once: the form of
+/// every work list.
+pub(super) fn live_sorted(mesh: &LabeledMesh, vertices: &mut Vec<VertexId>) {
+    vertices.par_sort_unstable();
+    vertices.dedup();
+    vertices.retain(|&v| mesh.is_vertex_alive(v));
 }
 
 impl EditGuard for Recorder<'_> {
