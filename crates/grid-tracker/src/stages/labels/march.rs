@@ -121,10 +121,6 @@ impl BucketQueue {
         self.len
     }
 
-    fn is_empty(&self) -> bool {
-        self.len == 0
-    }
-
     #[inline]
     fn push(&mut self, item: Item) {
         self.len += 1;
@@ -281,31 +277,19 @@ impl Marching {
         }
     }
 
-    /// Finalises nodes in order of (distance, node) until the heap is empty, the next
-    /// distance exceeds `limit`, or the work bound is spent; `finalised(i)` is told every
-    /// node finalised.
-    fn run(
-        &mut self,
-        nodes: &impl Nodes,
-        points: &[BreakingPoint],
-        slots: &mut [Slot],
-        limit: f64,
-        mut finalised: impl FnMut(u32),
-    ) {
+    /// Finalises nodes in order of (distance, node) until the heap is empty or the work
+    /// bound is spent.
+    fn run(&mut self, nodes: &impl Nodes, points: &[BreakingPoint], slots: &mut [Slot]) {
         let budget = self.heap.len() + UPDATES_PER_NODE * nodes.len();
         for _ in 0..budget {
             let Some(Item { distance, node }) = self.heap.peek() else {
                 break;
             };
-            if distance > limit {
-                break;
-            }
             self.heap.pop();
             let cur = slots[node as usize];
             if cur.point >= Slot::CLOSED || cur.distance < distance {
                 continue; // stale entry
             }
-            finalised(node);
             let position = points[cur.point as usize].position;
             nodes.for_each_neighbour(node, |j, at| {
                 self.offer(slots, j, at, cur.point, position);
@@ -328,7 +312,7 @@ pub fn march_over(
 ) -> usize {
     let mut marching = Marching::new();
     marching.seed(nodes, points, seeds, slots);
-    marching.run(nodes, points, slots, f64::INFINITY, |_| {});
+    marching.run(nodes, points, slots);
     marching.updates
 }
 
@@ -358,79 +342,69 @@ pub const NO_NODE: u32 = u32::MAX;
 pub struct FarFieldStats {
     /// Updates of all levels (work measure).
     pub updates: usize,
-    /// Nodes beyond the band of the fine march near the seeds, filled from the coarse
-    /// march.
+    /// Nodes beyond the band, filled from the coarse march.
     pub far_nodes: usize,
     /// Far nodes marched again at full resolution.
     pub refined_nodes: usize,
 }
 
-/// [`march_over`] for regions deep in volume, such as the overlap of solids: the same
-/// propagation near the seeds, a coarser one far from them. Why: where rotated copies of
-/// a solid overlap, the non-physical region is a volume, and a full-resolution march
+/// The nearest breaking points of the nodes beyond the band, for regions deep in volume
+/// such as the overlap of solids. Why not [`march_over`] everywhere: where rotated copies
+/// of a solid overlap, the non-physical region is a volume, and a full-resolution march
 /// over it is memory-bound work per node of that volume (measured on 6 bunnies at 5.4M
 /// triangles: 19M region cells, labels 39 s of a 121 s `fix`), while labels change only
 /// across surfaces.
 ///
-/// 1. **Band**: the fine march from `seeds`, finalising every node within `band` of its
-///    nearest point — exactly what [`march_over`] gives there, since both finalise in
-///    the same order.
-/// 2. **Coarse**: the march resumes from every coarse node holding a point, over the
+/// On entry `slots` holds, for every node `near` (in the band: within a few cells of a
+/// breaking point), its nearest point (found exactly by the caller, see
+/// [`super::nearest`]); every other node is [`Slot::OPEN`] or [`Slot::CLOSED`].
+///
+/// 1. **Coarse**: the march resumes from every coarse node holding a point, over the
 ///    coarse nodes only (block³ times fewer nodes).
-/// 3. **Fill**: every node beyond the band takes the nearest of the points its coarse
+/// 2. **Fill**: every node beyond the band takes the nearest of the points its coarse
 ///    cell's eight corners hold (and its own, if it has one), independently, in parallel.
-/// 4. **Refine**: where those corners carry more than one label (a label interface runs
+/// 3. **Refine**: where those corners carry more than one label (a label interface runs
 ///    through the coarse cell) or none reached the node, grown by one node so that every
 ///    edge across which labels may change has both ends refined, each of those nodes takes
 ///    the nearest of the points held by the coarse nodes of the 3 × 3 × 3 coarse cells
 ///    around its own and by its band neighbours — independently, in parallel, so the
 ///    refinement costs a fixed amount per node instead of a heap-ordered march.
-/// 5. **Rest**: a flagged node that none of those reach (a coarse corner outside the
+/// 4. **Rest**: a flagged node that none of those reach (a coarse corner outside the
 ///    region) is marched over such nodes only, from its reached neighbours.
 ///
-/// Beyond the band a node's point may be up to about ℓ/2 farther than the plain march's
-/// where its coarse cell is not refined; it has the same label there (all corners agree),
-/// and §8.3 reads points only across label changes, which are refined.
+/// Beyond the band a node's point may be up to about ℓ/2 farther than the nearest where
+/// its coarse cell is not refined; it has the same label there (all corners agree), and
+/// §8.3 reads points only across label changes, which are refined.
 ///
-/// Deterministic: levels 1, 2 and 5 are sequential in the order of [`march_over`], levels
-/// 3 and 4 are pure functions per node (ties go to the lower point id).
+/// Deterministic: levels 1 and 4 are sequential in the order of [`march_over`], levels
+/// 2 and 3 are pure functions per node (ties go to the lower point id).
 pub fn march_far_field(
     levels: &(impl Levels + Sync),
     points: &[BreakingPoint],
-    seeds: impl Iterator<Item = (u32, u32)>,
     slots: &mut [Slot],
-    band: f64,
+    near: &[bool],
 ) -> FarFieldStats {
     use rayon::prelude::*;
     let fine = levels.fine();
     let n = fine.len();
     let mut stats = FarFieldStats::default();
-
-    // 1. Band.
-    let mut near = vec![false; n];
-    let mut marching = Marching::new();
-    marching.seed(fine, points, seeds, slots);
-    marching.run(fine, points, slots, band, |i| near[i as usize] = true);
-    stats.updates += marching.updates;
-    if marching.heap.is_empty() {
+    if (0..n).all(|i| near[i] || slots[i].point == Slot::CLOSED) {
         return stats; // nothing beyond the band
     }
-    drop(marching);
 
-    // 2. Coarse.
+    // 1. Coarse.
     let mut marching = Marching::new();
     for i in 0..n as u32 {
         if levels.is_coarse(i) {
             marching.resume(slots, i);
         }
     }
-    marching.run(levels.coarse(), points, slots, f64::INFINITY, |_| {});
+    marching.run(levels.coarse(), points, slots);
     stats.updates += marching.updates;
     drop(marching);
 
-    // 3. Fill: (node, nearest candidate, whether to refine it).
+    // 2. Fill: (node, nearest candidate, whether to refine it).
     let snapshot: &[Slot] = slots;
-    let near = &near;
     let filled: Vec<(u32, Slot, bool)> = (0..n as u32)
         .into_par_iter()
         .filter(|&i| !near[i as usize] && snapshot[i as usize].point != Slot::CLOSED)
@@ -484,7 +458,7 @@ pub fn march_far_field(
     flagged.sort_unstable();
     stats.refined_nodes = flagged.len();
 
-    // 4. Refine: every flagged node takes the nearest of the points held by the coarse
+    // 3. Refine: every flagged node takes the nearest of the points held by the coarse
     //    nodes around its coarse cell and by its fine neighbours in the band,
     //    independently, in parallel.
     let snapshot: &[Slot] = slots;
@@ -522,7 +496,7 @@ pub fn march_far_field(
         slots[i as usize] = slot;
     }
 
-    // 5. Rest: a flagged node none of those reach (the region is not a full box, so a
+    // 4. Rest: a flagged node none of those reach (the region is not a full box, so a
     //    coarse node may be missing) is marched from its neighbours, over such nodes only.
     let unreached: Vec<u32> = flagged
         .iter()
@@ -551,7 +525,7 @@ pub fn march_far_field(
             }
         });
     }
-    marching.run(&only, points, slots, f64::INFINITY, |_| {});
+    marching.run(&only, points, slots);
     stats.updates += marching.updates;
     stats
 }
@@ -682,7 +656,7 @@ mod tests {
                 let got = queue.pop().expect("queue ran out before the heap");
                 prop_assert_eq!((got.distance, got.node), (expected.distance, expected.node));
             }
-            prop_assert!(queue.is_empty());
+            prop_assert_eq!(queue.len(), 0);
         }
     }
 }

@@ -10,20 +10,22 @@
 //!   the edge, the material vector turns from physical to non-physical (or back) — the
 //!   last point with a well-defined label before an ill-defined stretch (Fig. 10). Its
 //!   label is the physical side's. Found from the crossings of §5 ([`breaking`]).
-//! - **fast marching** ([`march`]): every non-physical node takes the label of its
-//!   nearest breaking point, found by a Dijkstra-ordered propagation of closest points
-//!   over the region's grid nodes (Sethian 1999; the propagated quantity is the nearest
-//!   breaking point itself, so distances are true Euclidean distances to it). Physical
-//!   nodes relay points without taking their labels. Farther than 8 cells from every
-//!   breaking point (the inside of overlapping solids) the march runs on a 4× coarser
-//!   lattice; nodes between coarse nodes take the nearest of the coarse points around
-//!   them, looking wider where labels change ([`march::march_far_field`]; not in the
-//!   paper, which marches every node).
+//! - **nearest breaking point**: every non-physical node takes the label of its nearest
+//!   breaking point. The paper finds it by fast marching (Sethian 1999), a
+//!   Dijkstra-ordered propagation of closest points over the region's grid nodes
+//!   ([`march`]). Here, within 8 cells of a breaking point (the band, where labels
+//!   change) each node asks a k-d tree of the breaking points of its part of the region
+//!   for the exact nearest one ([`nearest`]), which the propagation approximates;
+//!   farther away (the inside of overlapping solids) the closest points are marched on a
+//!   4× coarser lattice and nodes between coarse nodes take the nearest of the coarse
+//!   points around them, looking wider where labels change ([`march::march_far_field`]).
+//!   Neither is in the paper, which marches every node; both are for speed on large
+//!   overlaps ([`nearest`] says why).
 //!
 //! Fallback (not in the paper, which assumes every non-physical component touches a
 //! breaking point): a non-physical node that no breaking point reaches (none lies in its
 //! connected part of the region) takes the label of the nearest physical region node
-//! adjacent to its non-physical component, propagated the same way
+//! adjacent to its non-physical component, propagated by fast marching
 //! (its "breaking point" is that node's position); a component with no physical neighbour
 //! at all — impossible for a region inside the grid, since nodes next to intact cells are
 //! physical — gets the outside label 0. Both cases are counted in [`LabelStats`].
@@ -40,6 +42,7 @@
 
 pub mod breaking;
 pub mod march;
+pub mod nearest;
 pub mod nodes;
 
 use std::collections::HashMap;
@@ -64,7 +67,9 @@ pub use nodes::{NodeIndex, region_nodes};
 #[serde(rename_all = "snake_case")]
 pub enum LabelCorrection {
     /// The paper's: the label of the nearest *breaking point* (the exact point along a
-    /// grid edge where the material vector stops being physical), by fast marching.
+    /// grid edge where the material vector stops being physical), which the paper finds
+    /// by fast marching; here exactly within 8 cells of one and by a coarse march beyond
+    /// (module docs).
     #[default]
     FastMarching,
     /// The simpler choice the paper improves on: the label of the nearest *physical grid
@@ -96,7 +101,8 @@ pub struct LabelStats {
     pub nodes: usize,
     /// Region nodes with a physical vector.
     pub physical_nodes: usize,
-    /// Region nodes labelled by fast marching from breaking points.
+    /// Region nodes labelled from breaking points (nearest-point queries and the far
+    /// field).
     pub marched_nodes: usize,
     /// Region edges walked for crossings and breaking points.
     pub scanned_edges: usize,
@@ -107,7 +113,7 @@ pub struct LabelStats {
     pub fallback_nodes: usize,
     /// Non-physical nodes not reached at all, labelled 0 (last resort).
     pub unreached_nodes: usize,
-    /// Label updates of the marching (work measure).
+    /// Label updates of the far field's marching (work measure).
     pub updates: usize,
     /// Nodes farther than the far-field band from every breaking point, labelled from the
     /// coarse march ([`march::march_far_field`]).
@@ -224,7 +230,8 @@ fn physical_status(
 ///
 /// Physical nodes keep their label. Breaking points are found on every edge of every
 /// flawed cell ([`breaking`]); each non-physical node then takes the label of the nearest
-/// one by fast marching ([`march`]), with the fallback described in the module docs.
+/// one (exactly near breaking points, see the module docs), with the fallback described
+/// there.
 /// Deterministic: the result does not depend on thread timing.
 pub fn correct_labels(
     mesh: &LabeledMesh,
@@ -351,16 +358,10 @@ pub fn correct_labels_with(
         k
     };
     let bps: Vec<BreakingPoint> = points.iter().map(|p| p.1).collect();
-    let seeds = points.iter().enumerate().flat_map(|(k, (e, _))| {
-        [e.node, e.end()]
-            .into_iter()
-            .filter_map(move |n| idx(n).map(|i| (i as u32, k as u32)))
-    });
     let mut slots = vec![march::Slot::OPEN; nodes.len()];
     if open.iter().any(|&o| o) {
-        let levels = RegionLevels::new(&nodes, &index, &lattice);
-        let band = FAR_FIELD_BAND_CELLS * lattice.cell_size;
-        let far = march::march_far_field(&levels, &bps, seeds, &mut slots, band);
+        let far;
+        (slots, far) = nearest_points(&nodes, &index, &lattice, &bps, |k| idx(points[k].0.node));
         stats.updates += far.updates;
         stats.far_nodes = far.far_nodes;
         stats.refined_nodes = far.refined_nodes;
@@ -558,16 +559,110 @@ impl march::Nodes for RegionNodes<'_> {
     }
 }
 
+/// Every region node's nearest breaking point (`points`, each on an edge with region
+/// node `seed(k)` at one end): exactly within [`FAR_FIELD_BAND_CELLS`] of one, by a
+/// query per node ([`nearest::PointTree`]), and from the coarse march of
+/// [`march::march_far_field`] beyond. A node only takes points of its own 26-connected
+/// part of the region, the points a march over the region's nodes could carry to it.
+///
+/// Why not march the band too: a march finalises nodes in order of distance, sweeping the
+/// band of the whole surface at once, so every step touches neighbours scattered over a
+/// working set as large as the band; it was bound by memory latency and slowed down per
+/// node as the band outgrew the caches (6 bunnies: 3.1 µs per band node at 337k
+/// triangles, 4.8 µs at 1.35M, where the band was three quarters of the stage). The
+/// queries are independent, run on every core in lattice order, and give the exact
+/// nearest point, which the march's closest-point propagation approximates.
+fn nearest_points(
+    nodes: &[IVec3],
+    index: &NodeIndex,
+    lattice: &crate::stages::grid::Lattice,
+    points: &[BreakingPoint],
+    seed: impl Fn(usize) -> Option<usize>,
+) -> (Vec<march::Slot>, march::FarFieldStats) {
+    let band = FAR_FIELD_BAND_CELLS * lattice.cell_size;
+    let parts = components(nodes, index);
+    let tree = nearest::PointTree::new(
+        points
+            .iter()
+            .enumerate()
+            .map(|(k, p)| (p.position, seed(k).map_or(u32::MAX, |i| parts[i]))),
+    );
+    // A block of the far field's coarse cells (its nodes lie within 1.5·√3 cells of its
+    // centre) with no point within this of its centre has none within the band of any
+    // of its nodes: deep inside an overlap, one query answers for up to 64 nodes.
+    let block_radius = (band + 1.5 * 3f64.sqrt() * lattice.cell_size) * (1.0 + 1e-9);
+    let (parts, tree) = (&parts, &tree);
+    let (mut slots, near): (Vec<march::Slot>, Vec<bool>) = (0..nodes.len())
+        .into_par_iter()
+        .chunks(NEAREST_CHUNK)
+        .flat_map_iter(|chunk| {
+            let mut hint = None;
+            let mut empty: HashMap<IVec3, bool, BuildHasherDefault<TileHasher>> =
+                HashMap::default();
+            chunk.into_iter().map(move |i| {
+                let p = nodes[i];
+                let block = p.div_euclid(IVec3::splat(FAR_FIELD_BLOCK));
+                let deep = *empty.entry(block).or_insert_with(|| {
+                    let corner = lattice.node_position(block * FAR_FIELD_BLOCK);
+                    let centre = corner + DVec3::splat(1.5 * lattice.cell_size);
+                    !tree.any_within(centre, block_radius)
+                });
+                if deep {
+                    return (march::Slot::OPEN, false);
+                }
+                let at = lattice.node_position(p);
+                match tree.nearest(at, parts[i], band, hint) {
+                    Some(found) => {
+                        hint = Some(found);
+                        let slot = march::Slot {
+                            distance: found.distance,
+                            point: found.id,
+                        };
+                        (slot, true)
+                    }
+                    None => (march::Slot::OPEN, false),
+                }
+            })
+        })
+        .unzip();
+    let levels = RegionLevels::new(nodes, index, lattice);
+    let far = march::march_far_field(&levels, points, &mut slots, &near);
+    (slots, far)
+}
+
+/// Region nodes per task of [`nearest_points`]' queries: consecutive nodes are
+/// neighbours, so each query starts from the previous one's answer (the hint of
+/// [`nearest::PointTree::nearest`]).
+const NEAREST_CHUNK: usize = 4096;
+
+/// The 26-connected parts of the region (the march's stencil), each node's as its part's
+/// smallest node.
+fn components(nodes: &[IVec3], index: &NodeIndex) -> Vec<u32> {
+    let mut parent: Vec<u32> = (0..nodes.len() as u32).collect();
+    for (i, &p) in nodes.iter().enumerate() {
+        // The half of the stencil after the node in lattice order: each pair once.
+        for d in &march::OFFSETS[march::STENCIL / 2..] {
+            if let Some(j) = index.get(p + *d) {
+                mesh_core::union_find::union(&mut parent, i as u32, j);
+            }
+        }
+    }
+    (0..nodes.len() as u32)
+        .map(|i| mesh_core::union_find::find(&mut parent, i))
+        .collect()
+}
+
 /// Lattice cells between the coarse nodes of the far-field march
 /// ([`march::march_far_field`]): 4³ = 64 times fewer nodes marched far from the breaking
 /// points.
 const FAR_FIELD_BLOCK: i32 = 4;
 
-/// Distance from the nearest breaking point, in cells, within which the march runs at full
-/// resolution: two coarse cells. Narrower is cheaper in the band but coarser beyond it:
-/// on the test block whose faces carry six labels the fill's points stay within ~0.4ℓ of
-/// the nearest with 8 cells and 1ℓ with 2, and on 6 bunnies at 1.35M triangles a 2-cell
-/// band leaves 839k nodes to refine against 602k (timings too noisy there to rank them).
+/// Distance from the nearest breaking point, in cells, within which every node gets the
+/// exact nearest point (the band of [`nearest_points`]): two coarse cells. Narrower is
+/// cheaper in the band but coarser beyond it: on the test block whose faces carry six
+/// labels the fill's points stay within ~0.4ℓ of the nearest with 8 cells and 1ℓ with 2,
+/// and on 6 bunnies at 1.35M triangles a 2-cell band leaves 839k nodes to refine against
+/// 602k (timings too noisy there to rank them, measured with the band marched).
 const FAR_FIELD_BAND_CELLS: f64 = 2.0 * FAR_FIELD_BLOCK as f64;
 
 /// The region's nodes at the far-field march's two resolutions.

@@ -275,14 +275,16 @@ fn region_nodes_list_the_stencil_neighbours_in_order() {
     }
 }
 
-/// The far-field march against the plain one on a solid block of 41³ nodes whose six
-/// faces are breaking points of six labels (the inside of an overlap, seen from its
-/// surfaces): nodes within the band get exactly the plain march's points; beyond it every
-/// node is reached, its point is within ℓ/2 of the true nearest breaking point, and it
-/// takes another label than the plain march only where both labels are equally near (on
-/// the diagonal planes between two faces).
+/// The nearest points of the stage (exact in the band, the far-field march beyond)
+/// against the plain march and against looking at every point, on a solid block of 41³
+/// nodes whose six faces are breaking points of six labels (the inside of an overlap,
+/// seen from its surfaces): nodes within the band get exactly the nearest point (the
+/// lowest id among equally near ones), never farther than the plain march's; beyond it
+/// every node is reached, its point is within ℓ/2 of the nearest, and it takes another
+/// label than the plain march only where both labels are equally near (on the diagonal
+/// planes between two faces).
 #[test]
-fn the_far_field_march_matches_the_plain_one() {
+fn nearest_points_are_exact_in_the_band_and_near_beyond() {
     let n = 41;
     let lattice = crate::stages::grid::Lattice {
         origin: DVec3::new(0.3, -0.2, 0.1),
@@ -321,10 +323,9 @@ fn the_far_field_march_matches_the_plain_one() {
     let fine = RegionNodes::new(&nodes, &index, &lattice, 1);
     let mut plain = vec![march::Slot::OPEN; nodes.len()];
     march::march_over(&fine, &points, seeds.iter().copied(), &mut plain);
-    let levels = RegionLevels::new(&nodes, &index, &lattice);
     let band = FAR_FIELD_BAND_CELLS * ell;
-    let mut far = vec![march::Slot::OPEN; nodes.len()];
-    let stats = march::march_far_field(&levels, &points, seeds.iter().copied(), &mut far, band);
+    let seed_of: Vec<usize> = seeds.iter().map(|&(i, _)| i as usize).collect();
+    let (far, stats) = nearest_points(&nodes, &index, &lattice, &points, |k| Some(seed_of[k]));
     assert!(stats.far_nodes > 10_000, "{stats:?}");
     assert!(stats.refined_nodes < stats.far_nodes, "{stats:?}");
     let nearest_of = |at: DVec3, label: Option<Label>| {
@@ -337,16 +338,17 @@ fn the_far_field_march_matches_the_plain_one() {
     let mut relabelled = 0;
     for (i, (p, f)) in plain.iter().zip(&far).enumerate() {
         assert!(f.point < march::Slot::CLOSED, "node {i} unreached");
-        if p.distance <= band {
-            assert_eq!(
-                (p.point, p.distance),
-                (f.point, f.distance),
-                "band node {i}"
-            );
-            continue;
-        }
         let at = lattice.node_position(nodes[i]);
         let nearest = nearest_of(at, None);
+        if nearest <= band {
+            let lowest = points
+                .iter()
+                .position(|b| b.position.distance(at) == nearest)
+                .unwrap() as u32;
+            assert_eq!((f.point, f.distance), (lowest, nearest), "band node {i}");
+            assert!(f.distance <= p.distance, "band node {i}");
+            continue;
+        }
         assert!(
             f.distance <= nearest + 0.5 * ell,
             "node {i}: {} vs {nearest}",
@@ -365,5 +367,125 @@ fn the_far_field_march_matches_the_plain_one() {
     assert!(
         relabelled < nodes.len() / 50,
         "{relabelled} nodes relabelled"
+    );
+}
+
+/// Within the band a node takes points of its own part of the region only, as a march
+/// over the region's nodes would: of two blocks two cells apart, the one without breaking
+/// points is left to the far field (which does look across parts, as it always has)
+/// though every node of it is well within the band of the other's point.
+#[test]
+fn band_points_stay_in_their_part_of_the_region() {
+    let lattice = crate::stages::grid::Lattice {
+        origin: DVec3::ZERO,
+        cell_size: 1.0,
+    };
+    let mut nodes = Vec::new();
+    for z in 0..4 {
+        for y in 0..4 {
+            for x in (0..4).chain(6..10) {
+                nodes.push(IVec3::new(x, y, z));
+            }
+        }
+    }
+    nodes.sort_by_key(|p| [p.z, p.y, p.x]);
+    let index = NodeIndex::Sparse(
+        nodes
+            .iter()
+            .enumerate()
+            .map(|(i, &p)| (p, i as u32))
+            .collect(),
+    );
+    // One breaking point just outside the first block's far face.
+    let seed = index.get(IVec3::new(3, 1, 1)).unwrap() as usize;
+    let points = [BreakingPoint {
+        position: DVec3::new(3.5, 1.0, 1.0),
+        label: Label::new(1),
+    }];
+    let (slots, stats) = nearest_points(&nodes, &index, &lattice, &points, |_| Some(seed));
+    assert_eq!(stats.far_nodes, nodes.len() / 2, "{stats:?}");
+    for (i, p) in nodes.iter().enumerate().filter(|(_, p)| p.x < 4) {
+        let exact = points[0].position.distance(lattice.node_position(*p));
+        assert_eq!((slots[i].point, slots[i].distance), (0, exact), "node {p}");
+    }
+}
+
+/// Every node within the band of scattered breaking points gets exactly the nearest one
+/// (the lowest id among equally near ones) and no other node is in the band, wherever
+/// the points lie against the far field's blocks: the check that lets one query answer
+/// for a whole block deep inside must not skip a node whose nearest point is within the
+/// band.
+#[test]
+fn band_nodes_get_the_exact_nearest_of_scattered_points() {
+    let n = 30;
+    let lattice = crate::stages::grid::Lattice {
+        origin: DVec3::new(-0.1, 0.2, 0.05),
+        cell_size: 1.0,
+    };
+    let mut nodes = Vec::new();
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                nodes.push(IVec3::new(x, y, z));
+            }
+        }
+    }
+    let index = NodeIndex::Dense {
+        lo: IVec3::ZERO,
+        dims: IVec3::splat(n),
+        index: (0..nodes.len() as u32).collect(),
+    };
+    // A few points at pseudo-random spots (a fixed linear congruential sequence), each
+    // seeded at the node below it.
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut next = || {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let points: Vec<BreakingPoint> = (0..6)
+        .map(|k| BreakingPoint {
+            position: lattice.origin
+                + DVec3::new(next(), next(), next()) * (n - 1) as f64 * lattice.cell_size,
+            label: Label::new(1 + k % 2),
+        })
+        .collect();
+    let seed_of: Vec<usize> = points
+        .iter()
+        .map(|b| {
+            let p = ((b.position - lattice.origin) / lattice.cell_size)
+                .floor()
+                .as_ivec3();
+            index.get(p).unwrap() as usize
+        })
+        .collect();
+    let (slots, stats) = nearest_points(&nodes, &index, &lattice, &points, |k| Some(seed_of[k]));
+    let band = FAR_FIELD_BAND_CELLS * lattice.cell_size;
+    let mut in_band = 0;
+    for (i, &p) in nodes.iter().enumerate() {
+        let at = lattice.node_position(p);
+        let nearest = points
+            .iter()
+            .map(|b| b.position.distance(at))
+            .fold(f64::INFINITY, f64::min);
+        if nearest <= band {
+            in_band += 1;
+            let lowest = points
+                .iter()
+                .position(|b| b.position.distance(at) == nearest)
+                .unwrap() as u32;
+            assert_eq!(
+                (slots[i].point, slots[i].distance),
+                (lowest, nearest),
+                "node {p}"
+            );
+        }
+    }
+    // Every node beyond the band, and only those, was left to the far field.
+    assert_eq!(stats.far_nodes, nodes.len() - in_band, "{stats:?}");
+    assert!(
+        in_band > 1000 && stats.far_nodes > 1000,
+        "{in_band} in the band, {stats:?}"
     );
 }
