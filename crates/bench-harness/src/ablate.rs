@@ -84,7 +84,7 @@ pub const PRESETS: &[Preset] = &[
     },
     Preset {
         name: "label-correction",
-        summary: "grid: fast marching to breaking points vs nearest physical grid vertex (2024 paper §8.1)",
+        summary: "grid: nearest breaking point (the paper finds it by fast marching) vs nearest physical grid vertex (2024 paper §8.1)",
         backends: GRID,
         settings: &[
             ("fast-marching", &["grid.label_correction=fast_marching"]),

@@ -478,7 +478,7 @@ Presets (each sets the backend, the varied options and fixed options; --vary add
   resampling        grid: local vs global resampling (2024 Fig. 17b), local improvement
   deep-cells        grid: deep-cell test on/off (2024 Fig. 9)
   curve-smoothing   grid: non-manifold curve smoothing 10 steps vs off (2024 §8.3)
-  label-correction  grid: fast marching to breaking points vs nearest grid vertex (§8.1)
+  label-correction  grid: nearest breaking point vs nearest grid vertex (§8.1)
   merging           collision: snap merging vs none (Los Topos §7)
   t1                collision: T1 vertex separation on/off (Los Topos §5)
   impact-zones      collision: impact zones (fail-safe) on/off (El Topo §3.8) [1]
