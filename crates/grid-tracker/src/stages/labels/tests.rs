@@ -275,6 +275,37 @@ fn region_nodes_list_the_stencil_neighbours_in_order() {
     }
 }
 
+/// Every node of the box `[0, n)³`, in lattice order, with its dense index.
+fn solid_block(n: i32) -> (Vec<IVec3>, NodeIndex) {
+    let mut nodes = Vec::new();
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                nodes.push(IVec3::new(x, y, z));
+            }
+        }
+    }
+    let index = NodeIndex::Dense {
+        lo: IVec3::ZERO,
+        dims: IVec3::splat(n),
+        index: (0..nodes.len() as u32).collect(),
+    };
+    (nodes, index)
+}
+
+/// The nearest of `points` to `at` by looking at every one: its id (the lowest among
+/// equally near ones) and distance.
+fn exact_nearest(points: &[BreakingPoint], at: DVec3) -> (u32, f64) {
+    let mut best = (u32::MAX, f64::INFINITY);
+    for (k, b) in points.iter().enumerate() {
+        let d = b.position.distance(at);
+        if d < best.1 {
+            best = (k as u32, d);
+        }
+    }
+    best
+}
+
 /// The nearest points of the stage (exact in the band, the far-field march beyond)
 /// against the plain march and against looking at every point, on a solid block of 41³
 /// nodes whose six faces are breaking points of six labels (the inside of an overlap,
@@ -291,19 +322,7 @@ fn nearest_points_are_exact_in_the_band_and_near_beyond() {
         cell_size: 0.5,
     };
     let ell = lattice.cell_size;
-    let mut nodes = Vec::new();
-    for z in 0..n {
-        for y in 0..n {
-            for x in 0..n {
-                nodes.push(IVec3::new(x, y, z));
-            }
-        }
-    }
-    let index = NodeIndex::Dense {
-        lo: IVec3::ZERO,
-        dims: IVec3::splat(n),
-        index: (0..nodes.len() as u32).collect(),
-    };
+    let (nodes, index) = solid_block(n);
     // Face k's nodes carry breaking points of label k + 1, half a cell outside the face.
     let mut points = Vec::new();
     let mut seeds = Vec::new();
@@ -341,11 +360,11 @@ fn nearest_points_are_exact_in_the_band_and_near_beyond() {
         let at = lattice.node_position(nodes[i]);
         let nearest = nearest_of(at, None);
         if nearest <= band {
-            let lowest = points
-                .iter()
-                .position(|b| b.position.distance(at) == nearest)
-                .unwrap() as u32;
-            assert_eq!((f.point, f.distance), (lowest, nearest), "band node {i}");
+            assert_eq!(
+                (f.point, f.distance),
+                exact_nearest(&points, at),
+                "band node {i}"
+            );
             assert!(f.distance <= p.distance, "band node {i}");
             continue;
         }
@@ -422,19 +441,7 @@ fn band_nodes_get_the_exact_nearest_of_scattered_points() {
         origin: DVec3::new(-0.1, 0.2, 0.05),
         cell_size: 1.0,
     };
-    let mut nodes = Vec::new();
-    for z in 0..n {
-        for y in 0..n {
-            for x in 0..n {
-                nodes.push(IVec3::new(x, y, z));
-            }
-        }
-    }
-    let index = NodeIndex::Dense {
-        lo: IVec3::ZERO,
-        dims: IVec3::splat(n),
-        index: (0..nodes.len() as u32).collect(),
-    };
+    let (nodes, index) = solid_block(n);
     // A few points at pseudo-random spots (a fixed linear congruential sequence), each
     // seeded at the node below it.
     let mut state = 0x2545_f491_4f6c_dd1du64;
@@ -465,21 +472,10 @@ fn band_nodes_get_the_exact_nearest_of_scattered_points() {
     let mut in_band = 0;
     for (i, &p) in nodes.iter().enumerate() {
         let at = lattice.node_position(p);
-        let nearest = points
-            .iter()
-            .map(|b| b.position.distance(at))
-            .fold(f64::INFINITY, f64::min);
-        if nearest <= band {
+        let want = exact_nearest(&points, at);
+        if want.1 <= band {
             in_band += 1;
-            let lowest = points
-                .iter()
-                .position(|b| b.position.distance(at) == nearest)
-                .unwrap() as u32;
-            assert_eq!(
-                (slots[i].point, slots[i].distance),
-                (lowest, nearest),
-                "node {p}"
-            );
+            assert_eq!((slots[i].point, slots[i].distance), want, "node {p}");
         }
     }
     // Every node beyond the band, and only those, was left to the far field.
