@@ -580,7 +580,7 @@ fn nearest_points(
     seed: impl Fn(usize) -> Option<usize>,
 ) -> (Vec<march::Slot>, march::FarFieldStats) {
     let band = FAR_FIELD_BAND_CELLS * lattice.cell_size;
-    let parts = components(nodes, index);
+    let parts = components(nodes);
     let tree = nearest::PointTree::new(
         points
             .iter()
@@ -636,20 +636,67 @@ fn nearest_points(
 const NEAREST_CHUNK: usize = 4096;
 
 /// The 26-connected parts of the region (the march's stencil), each node's as its part's
-/// smallest node.
-fn components(nodes: &[IVec3], index: &NodeIndex) -> Vec<u32> {
-    let mut parent: Vec<u32> = (0..nodes.len() as u32).collect();
+/// smallest node. `nodes` must be in lattice order (z, then y, then x), as
+/// [`region_nodes`] numbers them.
+///
+/// Works on runs (nodes consecutive along x in one lattice row, which are consecutive
+/// ids): a run is one part by itself, and two runs in neighbouring rows touch when their
+/// x ranges come within one of each other. Why: inside an overlap a row is one long run,
+/// so this is union–find over far fewer elements than nodes, with no per-node lookup of
+/// 13 neighbours (that was 0.37 s at 2.1M triangles, sequential).
+fn components(nodes: &[IVec3]) -> Vec<u32> {
+    // Runs as (first node, last node); rows as (z, y, first run) in order.
+    let mut runs: Vec<(u32, u32)> = Vec::new();
+    let mut rows: Vec<(i32, i32, u32)> = Vec::new();
     for (i, &p) in nodes.iter().enumerate() {
-        // The half of the stencil after the node in lattice order: each pair once.
-        for d in &march::OFFSETS[march::STENCIL / 2..] {
-            if let Some(j) = index.get(p + *d) {
-                mesh_core::union_find::union(&mut parent, i as u32, j);
+        let i = i as u32;
+        match runs.last_mut() {
+            Some(run) if nodes[run.1 as usize] + IVec3::X == p => run.1 = i,
+            _ => {
+                if rows.last().is_none_or(|r| (r.0, r.1) != (p.z, p.y)) {
+                    rows.push((p.z, p.y, runs.len() as u32));
+                }
+                runs.push((i, i));
             }
         }
     }
-    (0..nodes.len() as u32)
-        .map(|i| mesh_core::union_find::find(&mut parent, i))
-        .collect()
+    let row_runs = |k: usize| {
+        let end = rows.get(k + 1).map_or(runs.len(), |r| r.2 as usize);
+        rows[k].2 as usize..end
+    };
+    let mut parent: Vec<u32> = (0..runs.len() as u32).collect();
+    for k in 0..rows.len() {
+        let (z, y, _) = rows[k];
+        // The rows after this one that the stencil reaches: each pair of rows once.
+        for (dz, dy) in [(0, 1), (1, -1), (1, 0), (1, 1)] {
+            let key = (z + dz, y + dy);
+            let Ok(m) = rows.binary_search_by(|r| (r.0, r.1).cmp(&key)) else {
+                continue;
+            };
+            let others = row_runs(m);
+            for r in row_runs(k) {
+                let (lo, hi) = (nodes[runs[r].0 as usize].x, nodes[runs[r].1 as usize].x);
+                // Runs of the other row, in x order, from the first ending at lo − 1 or
+                // later while they start at hi + 1 or earlier.
+                let first = others.start
+                    + runs[others.clone()].partition_point(|s| nodes[s.1 as usize].x < lo - 1);
+                for s in first..others.end {
+                    if nodes[runs[s].0 as usize].x > hi + 1 {
+                        break;
+                    }
+                    mesh_core::union_find::union(&mut parent, r as u32, s as u32);
+                }
+            }
+        }
+    }
+    let mut parts = vec![0u32; nodes.len()];
+    for r in 0..runs.len() {
+        // A run's root is the part's first run, whose first node is the part's smallest.
+        let root = mesh_core::union_find::find(&mut parent, r as u32);
+        let (first, last) = runs[r];
+        parts[first as usize..=last as usize].fill(runs[root as usize].0);
+    }
+    parts
 }
 
 /// Lattice cells between the coarse nodes of the far-field march

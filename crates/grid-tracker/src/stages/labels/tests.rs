@@ -485,3 +485,33 @@ fn band_nodes_get_the_exact_nearest_of_scattered_points() {
         "{in_band} in the band, {stats:?}"
     );
 }
+
+proptest::proptest! {
+    /// The region's parts by runs against union–find over every node and its 26
+    /// neighbours, on random sparse node sets (thin diagonal contacts are common): the
+    /// same part, named by its smallest node, for every node.
+    #[test]
+    fn parts_by_runs_match_parts_by_nodes(
+        cells in proptest::collection::vec(proptest::bool::weighted(0.3), 7 * 6 * 5),
+    ) {
+        let nodes: Vec<IVec3> = (0..7 * 6 * 5)
+            .filter(|&k| cells[k as usize])
+            .map(|k| IVec3::new(k % 7, (k / 7) % 6, k / 42))
+            .collect();
+        let index = NodeIndex::Sparse(
+            nodes.iter().enumerate().map(|(i, &p)| (p, i as u32)).collect(),
+        );
+        let mut parent: Vec<u32> = (0..nodes.len() as u32).collect();
+        for (i, &p) in nodes.iter().enumerate() {
+            for d in march::OFFSETS {
+                if let Some(j) = index.get(p + d) {
+                    mesh_core::union_find::union(&mut parent, i as u32, j);
+                }
+            }
+        }
+        let want: Vec<u32> = (0..nodes.len() as u32)
+            .map(|i| mesh_core::union_find::find(&mut parent, i))
+            .collect();
+        proptest::prop_assert_eq!(components(&nodes), want);
+    }
+}
