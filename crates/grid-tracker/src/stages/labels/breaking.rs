@@ -22,6 +22,7 @@
 //! nearest each end ([`EdgeTransitions`]), the data §8.3 places edge vertices with.
 
 use glam::DVec3;
+use mesh_core::predicates::Axis;
 use mesh_core::{Label, LabeledMesh};
 
 use crate::stages::grid::primitives::GridEdge;
@@ -58,8 +59,9 @@ pub struct EdgeTransitions {
 pub(crate) struct EdgeScans {
     /// Edges walked.
     pub(crate) scanned: usize,
-    /// Edges with crossings or breaking points.
-    pub(crate) transitions: Vec<(GridEdge, EdgeTransitions)>,
+    /// Edges with crossings or breaking points, by their lower end's region node index
+    /// and axis.
+    pub(crate) transitions: Vec<(u32, Axis, EdgeTransitions)>,
     /// Every breaking point, with its edge.
     pub(crate) points: Vec<(GridEdge, BreakingPoint)>,
 }
@@ -114,8 +116,8 @@ pub(crate) fn needs_walk(materials: &Materials, edge: GridEdge, ends: [Option<No
     crossings > 0 || ends.iter().flatten().any(|&n| materials.is_flawed(n))
 }
 
-/// Walks `edge` (whose end nodes have physical labels `status`) and appends its breaking
-/// points and transitions to `out`. The caller walks only edges for which [`needs_walk`]
+/// Walks `edge` (whose end nodes have physical labels `status`), appends its breaking
+/// points to `out` and returns its transitions, if it has crossings or breaking points. The caller walks only edges for which [`needs_walk`]
 /// holds.
 pub(crate) fn scan_edge(
     mesh: &LabeledMesh,
@@ -125,7 +127,7 @@ pub(crate) fn scan_edge(
     status: [Option<Label>; 2],
     buf: &mut MaterialVector,
     out: &mut EdgeScans,
-) {
+) -> Option<EdgeTransitions> {
     let a = edge.node;
     let axis = edge.axis.index();
     let id = grid.node_id(a);
@@ -158,7 +160,5 @@ pub(crate) fn scan_edge(
         }
     }
     walk.step(edge, base, hi, status[1], false, points);
-    if walk.any {
-        out.transitions.push((edge, walk.t));
-    }
+    walk.any.then_some(walk.t)
 }

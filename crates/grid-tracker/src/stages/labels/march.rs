@@ -10,11 +10,13 @@
 //! extension).
 
 use std::cmp::Ordering;
-use std::collections::{BTreeMap, BinaryHeap};
+use std::collections::{BTreeMap, BinaryHeap, HashMap};
+use std::hash::BuildHasherDefault;
 
 use glam::{DVec3, IVec3};
 
 use super::BreakingPoint;
+use crate::stages::grid::tiles::TileHasher;
 
 /// The nearest breaking point known for a node, and its distance.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -316,7 +318,8 @@ pub fn march_over(
     marching.updates
 }
 
-/// The region's nodes at the two resolutions of [`march_far_field`].
+/// The region's nodes at the two resolutions of [`march_far_field`], in lattice order
+/// (z, then y, then x).
 pub trait Levels {
     /// The nodes with the full stencil (every neighbour one lattice step away).
     fn fine(&self) -> &(impl Nodes + Sync);
@@ -325,27 +328,28 @@ pub trait Levels {
     fn coarse(&self) -> &(impl Nodes + Sync);
     /// Whether node `i` is a coarse node.
     fn is_coarse(&self, i: u32) -> bool;
-    /// The coarse nodes at the corners of the coarse cell holding node `i` (a coarse node
-    /// is the lowest corner of its own cell); [`NO_NODE`] where a corner is no region
-    /// node.
-    fn coarse_corners(&self, i: u32) -> [u32; 8];
-    /// The coarse nodes at the corners of the 3 × 3 × 3 coarse cells centred on the one
-    /// holding node `i`; [`NO_NODE`] where a corner is no region node.
-    fn coarse_around(&self, i: u32) -> [u32; 64];
+    /// The coarse cell holding node `i`, in block units (a coarse node is the lowest
+    /// corner of its own cell).
+    fn cell(&self, i: u32) -> IVec3;
+    /// The part of the region node `i` lies in; a node takes only points of its own part.
+    fn part(&self, i: u32) -> u32;
+    /// The centre of the nodes of `cell` (those [`Levels::cell`] maps to it).
+    fn centre(&self, cell: IVec3) -> DVec3;
+    /// Calls `visit(j)` for every region node `j` at a corner of the 3 × 3 × 3 coarse
+    /// cells centred on `cell`, and for every region node within one lattice step of
+    /// `cell` (so for every stencil neighbour of its nodes); some more than once.
+    fn around(&self, cell: IVec3, visit: impl FnMut(u32));
 }
-
-/// Marks a missing coarse corner in [`Levels::coarse_corners`].
-pub const NO_NODE: u32 = u32::MAX;
 
 /// What [`march_far_field`] did, for the stage's statistics.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct FarFieldStats {
     /// Updates of all levels (work measure).
     pub updates: usize,
-    /// Nodes beyond the band, filled from the coarse march.
+    /// Nodes beyond the band, given a point from the coarse march.
     pub far_nodes: usize,
-    /// Far nodes marched again at full resolution.
-    pub refined_nodes: usize,
+    /// Far nodes no point of their part reached that way, marched from their neighbours.
+    pub rest_nodes: usize,
 }
 
 /// The nearest breaking points of the nodes beyond the band, for regions deep in volume
@@ -358,29 +362,33 @@ pub struct FarFieldStats {
 /// On entry `slots` holds, for every node `near` (in the band: within a few cells of a
 /// breaking point), its nearest point (found exactly by the caller, see
 /// [`super::nearest`]); every other node is [`Slot::OPEN`] or [`Slot::CLOSED`].
+/// `groups[k]` is the part of point `k` ([`Levels::part`]); `slabs` split the nodes
+/// into ranges whose coarse cells share their z coordinate.
 ///
 /// 1. **Coarse**: the march resumes from every coarse node holding a point, over the
 ///    coarse nodes only (block³ times fewer nodes).
-/// 2. **Fill**: every node beyond the band takes the nearest of the points its coarse
-///    cell's eight corners hold (and its own, if it has one), independently, in parallel.
-/// 3. **Refine**: where those corners carry more than one label (a label interface runs
-///    through the coarse cell) or none reached the node, grown by one node so that every
-///    edge across which labels may change has both ends refined, each of those nodes takes
-///    the nearest of the points held by the coarse nodes of the 3 × 3 × 3 coarse cells
-///    around its own and by its band neighbours — independently, in parallel, so the
-///    refinement costs a fixed amount per node instead of a heap-ordered march.
-/// 4. **Rest**: a flagged node that none of those reach (a coarse corner outside the
-///    region) is marched over such nodes only, from its reached neighbours.
+/// 2. **Gather**: every node beyond the band takes the nearest point of its part among
+///    those held by the coarse nodes of the 3 × 3 × 3 coarse cells around its own and by
+///    the band nodes next to its cell. The candidates are gathered once per coarse cell
+///    (block³ nodes share them, and deep inside an overlap they are a handful of distinct
+///    points), in parallel over slabs of coarse cells. A node scans them nearest to the
+///    cell's centre first and stops at the first that cannot beat its best, so it costs
+///    a few distances and no lookups.
+/// 3. **Rest**: a node that none of those reach (its coarse neighbours lie outside the
+///    region or hold points of another part) is marched over such nodes only, from its
+///    reached neighbours.
 ///
-/// Beyond the band a node's point may be up to about ℓ/2 farther than the nearest where
-/// its coarse cell is not refined; it has the same label there (all corners agree), and
-/// §8.3 reads points only across label changes, which are refined.
+/// Beyond the band a node's point may be up to about ℓ/2 farther than the nearest (the
+/// coarse march's error); labels change across surfaces where two coarse points meet,
+/// and both are candidates there.
 ///
-/// Deterministic: levels 1 and 4 are sequential in the order of [`march_over`], levels
-/// 2 and 3 are pure functions per node (ties go to the lower point id).
+/// Deterministic: levels 1 and 3 are sequential in the order of [`march_over`], level 2
+/// is a pure function per node (ties go to the lower point id).
 pub fn march_far_field(
     levels: &(impl Levels + Sync),
+    slabs: &[std::ops::Range<usize>],
     points: &[BreakingPoint],
+    groups: &[u32],
     slots: &mut [Slot],
     near: &[bool],
 ) -> FarFieldStats {
@@ -388,7 +396,8 @@ pub fn march_far_field(
     let fine = levels.fine();
     let n = fine.len();
     let mut stats = FarFieldStats::default();
-    if (0..n).all(|i| near[i] || slots[i].point == Slot::CLOSED) {
+    let far = |slots: &[Slot], i: usize| !near[i] && slots[i].point != Slot::CLOSED;
+    if !(0..n).any(|i| far(slots, i)) {
         return stats; // nothing beyond the band
     }
 
@@ -403,111 +412,67 @@ pub fn march_far_field(
     stats.updates += marching.updates;
     drop(marching);
 
-    // 2. Fill: (node, nearest candidate, whether to refine it).
+    // 2. Gather, per slab of coarse cells.
     let snapshot: &[Slot] = slots;
-    let filled: Vec<(u32, Slot, bool)> = (0..n as u32)
-        .into_par_iter()
-        .filter(|&i| !near[i as usize] && snapshot[i as usize].point != Slot::CLOSED)
-        .map(|i| {
-            let at = levels.fine().position(i);
-            let own = snapshot[i as usize];
-            let mut best = (own.point < Slot::CLOSED).then_some(own);
-            let mut label = None;
-            let mut mixed = false;
-            for c in levels.coarse_corners(i) {
-                let Some(s) = snapshot.get(c as usize).filter(|s| s.point < Slot::CLOSED) else {
-                    continue;
-                };
-                let p = &points[s.point as usize];
-                mixed |= label.is_some_and(|l| l != p.label);
-                label = Some(p.label);
-                let distance = at.distance(p.position);
-                let better = best.is_none_or(|b: Slot| {
-                    distance < b.distance || (distance == b.distance && s.point < b.point)
-                });
-                if better {
-                    best = Some(Slot {
-                        distance,
-                        point: s.point,
-                    });
-                }
-            }
-            (i, best.unwrap_or(Slot::OPEN), mixed || label.is_none())
+    let gathered: Vec<Vec<Slot>> = slabs
+        .par_iter()
+        .map(|range| {
+            let mut candidates = CellCandidates::default();
+            range
+                .clone()
+                .map(|i| {
+                    if !far(snapshot, i) {
+                        return snapshot[i];
+                    }
+                    let i = i as u32;
+                    let cell = levels.cell(i);
+                    let centre = levels.centre(cell);
+                    let around = |visit: &mut dyn FnMut(u32)| levels.around(cell, visit);
+                    let list = candidates.of(cell, centre, around, snapshot, points);
+                    let (at, part) = (fine.position(i), levels.part(i));
+                    // A candidate `from` the centre is at least `from - offset` from the
+                    // node; the list is in increasing `from`, so the scan stops at the
+                    // first one that cannot beat the best (with a margin for rounding).
+                    let offset = at.distance(centre) * (1.0 + 1e-12) + 1e-300;
+                    let mut best = Slot::OPEN;
+                    for &(from, k) in list {
+                        if from - offset > best.distance {
+                            break;
+                        }
+                        if groups[k as usize] != part {
+                            continue;
+                        }
+                        let distance = at.distance(points[k as usize].position);
+                        if distance < best.distance || (distance == best.distance && k < best.point)
+                        {
+                            best = Slot { distance, point: k };
+                        }
+                    }
+                    best
+                })
+                .collect()
         })
         .collect();
-    stats.far_nodes = filled.len();
-    let mut refine = vec![false; n];
-    let mut flagged: Vec<u32> = Vec::new();
-    for &(i, slot, again) in &filled {
-        slots[i as usize] = slot;
-        if again {
-            refine[i as usize] = true;
-            flagged.push(i);
+    for (range, slab) in slabs.iter().zip(gathered) {
+        slots[range.clone()].copy_from_slice(&slab);
+    }
+    let mut rest: Vec<u32> = Vec::new();
+    for i in 0..n {
+        if far(slots, i) {
+            stats.far_nodes += 1;
+            if slots[i].point == Slot::NONE {
+                rest.push(i as u32);
+            }
         }
     }
-    drop(filled);
-    for k in 0..flagged.len() {
-        fine.for_each_neighbour(flagged[k], |j, _| {
-            let ju = j as usize;
-            if !refine[ju] && !near[ju] && slots[ju].point != Slot::CLOSED {
-                refine[ju] = true;
-                flagged.push(j);
-            }
-        });
-    }
-    flagged.sort_unstable();
-    stats.refined_nodes = flagged.len();
+    stats.rest_nodes = rest.len();
 
-    // 3. Refine: every flagged node takes the nearest of the points held by the coarse
-    //    nodes around its coarse cell and by its fine neighbours in the band,
-    //    independently, in parallel.
-    let snapshot: &[Slot] = slots;
-    let refined: Vec<Slot> = flagged
-        .par_iter()
-        .map(|&i| {
-            let at = fine.position(i);
-            let mut best = snapshot[i as usize];
-            let consider = |point: u32, best: &mut Slot| {
-                if point >= Slot::CLOSED || point == best.point {
-                    return;
-                }
-                let distance = at.distance(points[point as usize].position);
-                if best.point >= Slot::CLOSED
-                    || distance < best.distance
-                    || (distance == best.distance && point < best.point)
-                {
-                    *best = Slot { distance, point };
-                }
-            };
-            for c in levels.coarse_around(i) {
-                if let Some(s) = snapshot.get(c as usize) {
-                    consider(s.point, &mut best);
-                }
-            }
-            fine.for_each_neighbour(i, |j, _| {
-                if near[j as usize] {
-                    consider(snapshot[j as usize].point, &mut best);
-                }
-            });
-            best
-        })
-        .collect();
-    for (&i, slot) in flagged.iter().zip(refined) {
-        slots[i as usize] = slot;
-    }
-
-    // 4. Rest: a flagged node none of those reach (the region is not a full box, so a
-    //    coarse node may be missing) is marched from its neighbours, over such nodes only.
-    let unreached: Vec<u32> = flagged
-        .iter()
-        .copied()
-        .filter(|&i| slots[i as usize].point >= Slot::CLOSED)
-        .collect();
-    if unreached.is_empty() {
+    // 3. Rest.
+    if rest.is_empty() {
         return stats;
     }
     let mut open = vec![false; n];
-    for &i in &unreached {
+    for &i in &rest {
         open[i as usize] = true;
     }
     let only = Only {
@@ -515,7 +480,7 @@ pub fn march_far_field(
         open: &open,
     };
     let mut marching = Marching::new();
-    for &i in &unreached {
+    for &i in &rest {
         let at = fine.position(i);
         fine.for_each_neighbour(i, |j, _| {
             let s = slots[j as usize];
@@ -528,6 +493,61 @@ pub fn march_far_field(
     marching.run(&only, points, slots);
     stats.updates += marching.updates;
     stats
+}
+
+/// The candidate points of the coarse cells of one slab (see [`march_far_field`]),
+/// gathered on a cell's first node and kept for the rest: distinct points with their
+/// distance from the cell's centre, nearest first.
+#[derive(Default)]
+struct CellCandidates {
+    /// Cell to its range in `list`.
+    cells: HashMap<IVec3, (u32, u32), BuildHasherDefault<TileHasher>>,
+    list: Vec<(f64, u32)>,
+    /// The last cell asked about (consecutive nodes along x share it), and its range.
+    last: Option<(IVec3, (u32, u32))>,
+    scratch: Vec<u32>,
+}
+
+impl CellCandidates {
+    /// The candidates of `cell` (centred on `centre`): the points `slots` holds at the
+    /// nodes `around` visits ([`Levels::around`]).
+    fn of(
+        &mut self,
+        cell: IVec3,
+        centre: DVec3,
+        around: impl FnOnce(&mut dyn FnMut(u32)),
+        slots: &[Slot],
+        points: &[BreakingPoint],
+    ) -> &[(f64, u32)] {
+        let range = match self.last {
+            Some((c, range)) if c == cell => range,
+            _ => {
+                let (list, scratch) = (&mut self.list, &mut self.scratch);
+                let range = *self.cells.entry(cell).or_insert_with(|| {
+                    scratch.clear();
+                    around(&mut |j| {
+                        let point = slots[j as usize].point;
+                        if point < Slot::CLOSED {
+                            scratch.push(point);
+                        }
+                    });
+                    scratch.sort_unstable();
+                    scratch.dedup();
+                    let first = list.len();
+                    list.extend(
+                        scratch
+                            .iter()
+                            .map(|&k| (centre.distance(points[k as usize].position), k)),
+                    );
+                    list[first..].sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+                    (first as u32, list.len() as u32)
+                });
+                self.last = Some((cell, range));
+                range
+            }
+        };
+        &self.list[range.0 as usize..range.1 as usize]
+    }
 }
 
 /// The neighbours of `nodes` restricted to those with `open[j]`.

@@ -17,8 +17,9 @@
 //!   change) each node asks a k-d tree of the breaking points of its part of the region
 //!   for the exact nearest one ([`nearest`]), which the propagation approximates;
 //!   farther away (the inside of overlapping solids) the closest points are marched on a
-//!   4× coarser lattice and nodes between coarse nodes take the nearest of the coarse
-//!   points around them, looking wider where labels change ([`march::march_far_field`]).
+//!   4× coarser lattice and every node takes the nearest of the points of the coarse
+//!   nodes around its coarse cell and of the band nodes next to it
+//!   ([`march::march_far_field`]).
 //!   Neither is in the paper, which marches every node; both are for speed on large
 //!   overlaps ([`nearest`] says why).
 //!
@@ -118,8 +119,9 @@ pub struct LabelStats {
     /// Nodes farther than the far-field band from every breaking point, labelled from the
     /// coarse march ([`march::march_far_field`]).
     pub far_nodes: usize,
-    /// Of those, the nodes marched again at full resolution (a label interface nearby).
-    pub refined_nodes: usize,
+    /// Of those, the nodes no coarse point of their part reached, marched from their
+    /// neighbours.
+    pub rest_nodes: usize,
 }
 
 /// What one region node knows.
@@ -127,12 +129,49 @@ pub struct LabelStats {
 struct NodeEntry {
     label: Label,
     physical: bool,
-    /// The nearest breaking point of a non-physical node.
-    breaking: Option<DVec3>,
+    /// The nearest breaking point of a non-physical node: an index into the breaking
+    /// points, then the fallback points (see [`NodeLabels::breaking_point`]), or
+    /// [`NodeEntry::NONE`]. An index, not a position, so that an entry is 12 bytes: there
+    /// is one per node of the region, millions where solids overlap.
+    breaking: u32,
 }
 
-/// A hash map from grid edges, with the grid's integer hasher.
-type EdgeMap<V> = HashMap<GridEdge, V, BuildHasherDefault<TileHasher>>;
+impl NodeEntry {
+    /// No breaking point.
+    const NONE: u32 = u32::MAX;
+}
+
+/// The [`EdgeTransitions`] of region edges by the edge's lower node: node `i`'s are
+/// `transitions[first[i]..first[i + 1]]`, one per axis at most. Why not a hash map: the
+/// edge scan already yields them in node order, so this is built by appending, where
+/// inserting every crossed edge into a map was sequential and a tenth of the stage (0.3 s
+/// at 2.1M triangles).
+#[derive(Clone, Debug, Default)]
+struct EdgeTable {
+    first: Vec<u32>,
+    transitions: Vec<(Axis, EdgeTransitions)>,
+}
+
+impl EdgeTable {
+    /// The table of `transitions` (each with its lower node's index below `nodes`).
+    fn new(nodes: usize, mut transitions: Vec<(u32, Axis, EdgeTransitions)>) -> Self {
+        let key = |t: &(u32, Axis, EdgeTransitions)| (t.0, t.1.index());
+        if !transitions.is_sorted_by_key(key) {
+            transitions.sort_unstable_by_key(key);
+        }
+        let mut first = Vec::with_capacity(nodes + 1);
+        for (k, t) in transitions.iter().enumerate() {
+            while first.len() <= t.0 as usize {
+                first.push(k as u32);
+            }
+        }
+        first.resize(nodes + 1, transitions.len() as u32);
+        EdgeTable {
+            first,
+            transitions: transitions.into_iter().map(|t| (t.1, t.2)).collect(),
+        }
+    }
+}
 
 /// One label per region node (§8.1), sparse over lattice nodes, plus the per-edge data of
 /// §8.3. Built by [`correct_labels`]; read-only afterwards.
@@ -141,8 +180,10 @@ pub struct NodeLabels {
     index: NodeIndex,
     nodes: Vec<IVec3>,
     entries: Vec<NodeEntry>,
-    edges: EdgeMap<EdgeTransitions>,
+    edges: EdgeTable,
     breaking_points: Vec<BreakingPoint>,
+    /// The physical node positions fallback nodes took their labels from.
+    fallback_points: Vec<DVec3>,
     stats: LabelStats,
 }
 
@@ -158,7 +199,14 @@ impl NodeLabels {
     /// region and nodes labelled by the last resort.
     #[inline]
     pub fn breaking_point(&self, node: IVec3) -> Option<DVec3> {
-        self.entry(node).and_then(|e| e.breaking)
+        let k = self.entry(node)?.breaking as usize;
+        match self.breaking_points.get(k) {
+            Some(b) => Some(b.position),
+            None => self
+                .fallback_points
+                .get(k - self.breaking_points.len())
+                .copied(),
+        }
     }
 
     /// Whether `node` is a region node with a physical vector (its label is its own).
@@ -171,7 +219,12 @@ impl NodeLabels {
     /// breaking point lies on it (§8.3 places edge vertices with them).
     #[inline]
     pub fn edge_transitions(&self, edge: &GridEdge) -> Option<EdgeTransitions> {
-        self.edges.get(edge).copied()
+        let i = self.index.get(edge.node)? as usize;
+        let (lo, hi) = (self.edges.first[i], self.edges.first[i + 1]);
+        self.edges.transitions[lo as usize..hi as usize]
+            .iter()
+            .find(|(axis, _)| *axis == edge.axis)
+            .map(|(_, t)| *t)
     }
 
     /// Every breaking point found, in a deterministic order.
@@ -295,7 +348,7 @@ pub fn correct_labels_with(
                     {
                         continue;
                     }
-                    breaking::scan_edge(
+                    let walked = breaking::scan_edge(
                         mesh,
                         grid,
                         materials,
@@ -304,6 +357,9 @@ pub fn correct_labels_with(
                         &mut buf,
                         &mut out,
                     );
+                    if let Some(t) = walked {
+                        out.transitions.push((i as u32, axis, t));
+                    }
                 }
                 (buf, out)
             },
@@ -317,13 +373,14 @@ pub fn correct_labels_with(
         physical_nodes: status.iter().filter(|s| s.is_some()).count(),
         ..LabelStats::default()
     };
-    let mut edges: EdgeMap<EdgeTransitions> = EdgeMap::default();
+    let mut transitions: Vec<(u32, Axis, EdgeTransitions)> = Vec::new();
     let mut points: Vec<(GridEdge, BreakingPoint)> = Vec::new();
     for s in scans {
         stats.scanned_edges += s.scanned;
-        edges.extend(s.transitions);
+        transitions.extend(s.transitions);
         points.extend(s.points);
     }
+    let edges = EdgeTable::new(nodes.len(), transitions);
     // Deterministic order, independent of how rayon split the work.
     points.sort_unstable_by(|a, b| {
         let key = |(e, p): &(GridEdge, BreakingPoint)| {
@@ -345,7 +402,6 @@ pub fn correct_labels_with(
     // Fast marching from the breaking points. Physical nodes relay the nearest point
     // without taking its label: a breaking point between two physical ends (a mixed
     // stretch inside one edge) or across a physical node may still be the nearest one.
-    let open: Vec<bool> = status.iter().map(Option::is_none).collect();
     let neighbours = |i: u32, out: &mut [u32; march::STENCIL]| {
         let p = nodes[i as usize];
         let mut k = 0;
@@ -359,41 +415,51 @@ pub fn correct_labels_with(
     };
     let bps: Vec<BreakingPoint> = points.iter().map(|p| p.1).collect();
     let mut slots = vec![march::Slot::OPEN; nodes.len()];
-    if open.iter().any(|&o| o) {
+    if status.iter().any(Option::is_none) {
         let far;
         (slots, far) = nearest_points(&nodes, &index, &lattice, &bps, |k| idx(points[k].0.node));
         stats.updates += far.updates;
         stats.far_nodes = far.far_nodes;
-        stats.refined_nodes = far.refined_nodes;
+        stats.rest_nodes = far.rest_nodes;
     }
-    let mut best: Vec<Option<march::Nearest>> = slots
-        .iter()
-        .zip(&open)
-        .map(|(s, &o)| {
-            (o && s.point < march::Slot::CLOSED).then(|| march::Nearest {
-                point: bps[s.point as usize],
-                distance: s.distance,
-            })
+    // Every node's entry; a non-physical node takes its nearest breaking point's label
+    // (with `NearestVertex`, only its position: the label is the fallback's).
+    let nearest_vertex = method == LabelCorrection::NearestVertex;
+    let reached = |i: usize| status[i].is_none() && slots[i].point < march::Slot::CLOSED;
+    let mut entries: Vec<NodeEntry> = (0..nodes.len())
+        .into_par_iter()
+        .map(|i| match status[i] {
+            Some(label) => NodeEntry {
+                label,
+                physical: true,
+                breaking: NodeEntry::NONE,
+            },
+            None if reached(i) => NodeEntry {
+                label: if nearest_vertex {
+                    Label::OUTSIDE
+                } else {
+                    bps[slots[i].point as usize].label
+                },
+                physical: false,
+                breaking: slots[i].point,
+            },
+            None => NodeEntry {
+                label: Label::OUTSIDE,
+                physical: false,
+                breaking: NodeEntry::NONE,
+            },
         })
         .collect();
-    drop(slots);
-    stats.marched_nodes = best.iter().filter(|b| b.is_some()).count();
+    stats.marched_nodes = (0..nodes.len()).filter(|&i| reached(i)).count();
     phase[2] = clock.elapsed().as_secs_f64();
 
     // Fallback: components no breaking point reached take the nearest physical label
     // (with `NearestVertex`, every non-physical node does; its breaking point, where
     // marched, is kept for vertex placement).
-    let nearest_vertex = method == LabelCorrection::NearestVertex;
-    let marched = if nearest_vertex {
-        std::mem::replace(&mut best, vec![None; nodes.len()])
-    } else {
-        Vec::new()
-    };
-    let unreached: Vec<bool> = open
-        .iter()
-        .zip(&best)
-        .map(|(&o, b)| o && b.is_none())
+    let unreached: Vec<bool> = (0..nodes.len())
+        .map(|i| status[i].is_none() && (nearest_vertex || !reached(i)))
         .collect();
+    let mut fallback_points: Vec<DVec3> = Vec::new();
     if unreached.iter().any(|&u| u) {
         let positions: Vec<DVec3> = nodes.iter().map(|&n| lattice.node_position(n)).collect();
         let mut fallback: Vec<Option<march::Nearest>> = vec![None; nodes.len()];
@@ -420,46 +486,32 @@ pub fn correct_labels_with(
             seeds.into_iter(),
             &mut fallback,
         );
-        for (b, f) in best.iter_mut().zip(fallback) {
-            if let Some(f) = f {
-                *b = Some(f);
-                stats.fallback_nodes += 1;
+        for (i, f) in fallback.into_iter().enumerate() {
+            let entry = &mut entries[i];
+            match f {
+                Some(f) => {
+                    stats.fallback_nodes += 1;
+                    entry.label = f.point.label;
+                    if entry.breaking == NodeEntry::NONE {
+                        entry.breaking = (bps.len() + fallback_points.len()) as u32;
+                        fallback_points.push(f.point.position);
+                    }
+                }
+                // Not even a physical node reached it: the last resort.
+                None if unreached[i] => {
+                    entry.label = Label::OUTSIDE;
+                    entry.breaking = NodeEntry::NONE;
+                }
+                None => {}
             }
         }
     }
-    for (b, m) in best.iter_mut().zip(marched) {
-        if let (Some(b), Some(m)) = (b.as_mut(), m) {
-            b.point.position = m.point.position;
-        }
-    }
-
-    phase[3] = clock.elapsed().as_secs_f64();
-    let entries: Vec<NodeEntry> = status
+    stats.unreached_nodes = entries
         .iter()
-        .zip(&best)
-        .map(|(&s, b)| match (s, b) {
-            (Some(label), _) => NodeEntry {
-                label,
-                physical: true,
-                breaking: None,
-            },
-            (None, Some(b)) => NodeEntry {
-                label: b.point.label,
-                physical: false,
-                breaking: Some(b.point.position),
-            },
-            (None, None) => NodeEntry {
-                label: Label::OUTSIDE,
-                physical: false,
-                breaking: None,
-            },
-        })
-        .collect();
-    stats.unreached_nodes = status
-        .iter()
-        .zip(&best)
-        .filter(|(s, b)| s.is_none() && b.is_none())
+        .filter(|e| !e.physical && e.breaking == NodeEntry::NONE)
         .count();
+    drop(slots);
+    phase[3] = clock.elapsed().as_secs_f64();
     phase[4] = clock.elapsed().as_secs_f64();
     // Where the time went (`RUST_LOG=grid_tracker=debug`): seconds since the start at the
     // end of each phase.
@@ -479,6 +531,7 @@ pub fn correct_labels_with(
         entries,
         edges,
         breaking_points: bps,
+        fallback_points,
         stats,
     })
 }
@@ -563,7 +616,8 @@ impl march::Nodes for RegionNodes<'_> {
 /// node `seed(k)` at one end): exactly within [`FAR_FIELD_BAND_CELLS`] of one, by a
 /// query per node ([`nearest::PointTree`]), and from the coarse march of
 /// [`march::march_far_field`] beyond. A node only takes points of its own 26-connected
-/// part of the region, the points a march over the region's nodes could carry to it.
+/// part of the region, the points a march over the region's nodes could carry to it
+/// (beyond the band too).
 ///
 /// Why not march the band too: a march finalises nodes in order of distance, sweeping the
 /// band of the whole surface at once, so every step touches neighbours scattered over a
@@ -581,59 +635,82 @@ fn nearest_points(
 ) -> (Vec<march::Slot>, march::FarFieldStats) {
     let band = FAR_FIELD_BAND_CELLS * lattice.cell_size;
     let parts = components(nodes);
-    let tree = nearest::PointTree::new(
-        points
-            .iter()
-            .enumerate()
-            .map(|(k, p)| (p.position, seed(k).map_or(u32::MAX, |i| parts[i]))),
-    );
-    // A block of the far field's coarse cells (its nodes lie within 1.5·√3 cells of its
-    // centre) with no point within this of its centre has none within the band of any
-    // of its nodes: deep inside an overlap, one query answers for up to 64 nodes.
-    let block_radius = (band + 1.5 * 3f64.sqrt() * lattice.cell_size) * (1.0 + 1e-9);
+    // Each point's part: the part of the node at one end of its edge.
+    let groups: Vec<u32> = (0..points.len())
+        .map(|k| seed(k).map_or(u32::MAX, |i| parts[i]))
+        .collect();
+    let tree = nearest::PointTree::new(points.iter().zip(&groups).map(|(p, &g)| (p.position, g)));
+    // Queries go by slabs of blocks (the far field's coarse cells), and each block asks
+    // once how far its centre is from the nearest point of any part. A node whose
+    // distance from the centre, taken from that, still leaves more than the band has no
+    // point within the band (triangle inequality; with a margin for rounding): deep
+    // inside an overlap one query answers for a whole block. Its nodes lie within the
+    // half-diagonal of the centre, so one beyond the band plus that answers for all.
+    let half_diagonal = 0.5 * (FAR_FIELD_BLOCK - 1) as f64 * 3f64.sqrt() * lattice.cell_size;
+    let block_radius = (band + half_diagonal) * (1.0 + 1e-9);
+    let slabs = slabs(nodes);
     let (parts, tree) = (&parts, &tree);
-    let (mut slots, near): (Vec<march::Slot>, Vec<bool>) = (0..nodes.len())
-        .into_par_iter()
-        .chunks(NEAREST_CHUNK)
-        .flat_map_iter(|chunk| {
+    let per_slab: Vec<(Vec<march::Slot>, Vec<bool>)> = slabs
+        .par_iter()
+        .map(|range| {
             let mut hint = None;
-            let mut empty: HashMap<IVec3, bool, BuildHasherDefault<TileHasher>> =
+            let mut blocks: HashMap<IVec3, (DVec3, f64), BuildHasherDefault<TileHasher>> =
                 HashMap::default();
-            chunk.into_iter().map(move |i| {
-                let p = nodes[i];
-                let block = p.div_euclid(IVec3::splat(FAR_FIELD_BLOCK));
-                let deep = *empty.entry(block).or_insert_with(|| {
-                    let corner = lattice.node_position(block * FAR_FIELD_BLOCK);
-                    let centre = corner + DVec3::splat(1.5 * lattice.cell_size);
-                    !tree.any_within(centre, block_radius)
-                });
-                if deep {
-                    return (march::Slot::OPEN, false);
-                }
-                let at = lattice.node_position(p);
-                match tree.nearest(at, parts[i], band, hint) {
-                    Some(found) => {
-                        hint = Some(found);
-                        let slot = march::Slot {
-                            distance: found.distance,
-                            point: found.id,
-                        };
-                        (slot, true)
+            range
+                .clone()
+                .map(|i| {
+                    let p = nodes[i];
+                    let block = p.div_euclid(IVec3::splat(FAR_FIELD_BLOCK));
+                    let (centre, from_centre) = *blocks.entry(block).or_insert_with(|| {
+                        let centre = block_centre(lattice, block);
+                        let from = tree.distance_within(centre, block_radius);
+                        (centre, from.unwrap_or(f64::INFINITY))
+                    });
+                    let at = lattice.node_position(p);
+                    if from_centre - at.distance(centre) > band * (1.0 + 1e-9) {
+                        return (march::Slot::OPEN, false);
                     }
-                    None => (march::Slot::OPEN, false),
-                }
-            })
+                    match tree.nearest(at, parts[i], band, hint) {
+                        Some(found) => {
+                            hint = Some(found);
+                            let slot = march::Slot {
+                                distance: found.distance,
+                                point: found.id,
+                            };
+                            (slot, true)
+                        }
+                        None => (march::Slot::OPEN, false),
+                    }
+                })
+                .unzip()
         })
-        .unzip();
-    let levels = RegionLevels::new(nodes, index, lattice);
-    let far = march::march_far_field(&levels, points, &mut slots, &near);
+        .collect();
+    let mut slots = Vec::with_capacity(nodes.len());
+    let mut near = Vec::with_capacity(nodes.len());
+    for (s, n) in per_slab {
+        slots.extend(s);
+        near.extend(n);
+    }
+    let levels = RegionLevels::new(nodes, index, lattice, parts);
+    let far = march::march_far_field(&levels, &slabs, points, &groups, &mut slots, &near);
     (slots, far)
 }
 
-/// Region nodes per task of [`nearest_points`]' queries: consecutive nodes are
-/// neighbours, so each query starts from the previous one's answer (the hint of
-/// [`nearest::PointTree::nearest`]).
-const NEAREST_CHUNK: usize = 4096;
+/// The region's nodes (in lattice order) by slabs of [`FAR_FIELD_BLOCK`] lattice layers:
+/// the ranges of nodes whose blocks share a z coordinate. Work per block (the far field's
+/// candidates, the band's test) is done once, by the task of the block's slab.
+fn slabs(nodes: &[IVec3]) -> Vec<std::ops::Range<usize>> {
+    let layer = |i: usize| nodes[i].z.div_euclid(FAR_FIELD_BLOCK);
+    let mut out = Vec::new();
+    let mut start = 0;
+    while start < nodes.len() {
+        let z = layer(start);
+        let end = start + nodes[start..].partition_point(|p| p.z.div_euclid(FAR_FIELD_BLOCK) == z);
+        out.push(start..end);
+        start = end;
+    }
+    out
+}
 
 /// The 26-connected parts of the region (the march's stencil), each node's as its part's
 /// smallest node. `nodes` must be in lattice order (z, then y, then x), as
@@ -704,18 +781,27 @@ fn components(nodes: &[IVec3]) -> Vec<u32> {
 /// points.
 const FAR_FIELD_BLOCK: i32 = 4;
 
+/// The centre of the nodes of `block` (those whose lattice coordinates divided by
+/// [`FAR_FIELD_BLOCK`] round down to it).
+fn block_centre(lattice: &crate::stages::grid::Lattice, block: IVec3) -> DVec3 {
+    lattice.node_position(block * FAR_FIELD_BLOCK)
+        + DVec3::splat(0.5 * (FAR_FIELD_BLOCK - 1) as f64 * lattice.cell_size)
+}
+
 /// Distance from the nearest breaking point, in cells, within which every node gets the
 /// exact nearest point (the band of [`nearest_points`]): two coarse cells. Narrower is
-/// cheaper in the band but coarser beyond it: on the test block whose faces carry six
-/// labels the fill's points stay within ~0.4ℓ of the nearest with 8 cells and 1ℓ with 2,
-/// and on 6 bunnies at 1.35M triangles a 2-cell band leaves 839k nodes to refine against
-/// 602k (timings too noisy there to rank them, measured with the band marched).
+/// cheaper in the band but coarser beyond it, where a node's candidates are the points
+/// of coarse nodes up to 2 cells off along each axis, so its point is off by about
+/// 4ℓ²/d at distance d: on the test block whose faces carry six labels, 0.41ℓ with 8
+/// cells, 0.68ℓ with 4.
 const FAR_FIELD_BAND_CELLS: f64 = 2.0 * FAR_FIELD_BLOCK as f64;
 
 /// The region's nodes at the far-field march's two resolutions.
 struct RegionLevels<'a> {
     fine: RegionNodes<'a>,
     coarse: RegionNodes<'a>,
+    /// Each node's part of the region ([`components`]).
+    parts: &'a [u32],
 }
 
 impl<'a> RegionLevels<'a> {
@@ -723,10 +809,12 @@ impl<'a> RegionLevels<'a> {
         nodes: &'a [IVec3],
         index: &'a NodeIndex,
         lattice: &'a crate::stages::grid::Lattice,
+        parts: &'a [u32],
     ) -> Self {
         RegionLevels {
             fine: RegionNodes::new(nodes, index, lattice, 1),
             coarse: RegionNodes::new(nodes, index, lattice, FAR_FIELD_BLOCK),
+            parts,
         }
     }
 }
@@ -748,35 +836,39 @@ impl march::Levels for RegionLevels<'_> {
     }
 
     #[inline]
-    fn coarse_corners(&self, i: u32) -> [u32; 8] {
-        let p = self.fine.nodes[i as usize];
-        let b = self.coarse.step;
-        let base = IVec3::new(
-            p.x.div_euclid(b) * b,
-            p.y.div_euclid(b) * b,
-            p.z.div_euclid(b) * b,
-        );
-        std::array::from_fn(|k| {
-            let k = k as i32;
-            let corner = base + IVec3::new(k & 1, (k >> 1) & 1, (k >> 2) & 1) * b;
-            self.fine.index.get(corner).unwrap_or(march::NO_NODE)
-        })
+    fn cell(&self, i: u32) -> IVec3 {
+        self.fine.nodes[i as usize].div_euclid(IVec3::splat(self.coarse.step))
     }
 
     #[inline]
-    fn coarse_around(&self, i: u32) -> [u32; 64] {
-        let p = self.fine.nodes[i as usize];
+    fn part(&self, i: u32) -> u32 {
+        self.parts[i as usize]
+    }
+
+    #[inline]
+    fn centre(&self, cell: IVec3) -> DVec3 {
+        block_centre(self.fine.lattice, cell)
+    }
+
+    fn around(&self, cell: IVec3, mut visit: impl FnMut(u32)) {
         let b = self.coarse.step;
-        let base = IVec3::new(
-            p.x.div_euclid(b) - 1,
-            p.y.div_euclid(b) - 1,
-            p.z.div_euclid(b) - 1,
-        ) * b;
-        std::array::from_fn(|k| {
-            let k = k as i32;
-            let corner = base + IVec3::new(k & 3, (k >> 2) & 3, k >> 4) * b;
-            self.fine.index.get(corner).unwrap_or(march::NO_NODE)
-        })
+        let index = self.fine.index;
+        for k in 0..64 {
+            let corner = (cell + IVec3::new(k & 3, (k >> 2) & 3, k >> 4) - IVec3::ONE) * b;
+            if let Some(j) = index.get(corner) {
+                visit(j);
+            }
+        }
+        let lo = cell * b - IVec3::ONE;
+        for z in lo.z..=lo.z + b + 1 {
+            for y in lo.y..=lo.y + b + 1 {
+                for x in lo.x..=lo.x + b + 1 {
+                    if let Some(j) = index.get(IVec3::new(x, y, z)) {
+                        visit(j);
+                    }
+                }
+            }
+        }
     }
 }
 

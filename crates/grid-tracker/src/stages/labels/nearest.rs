@@ -132,23 +132,21 @@ impl PointTree {
         radius: f64,
         hint: Option<Found>,
     ) -> Option<Found> {
-        self.search(at, Some(group), radius, hint, false)
+        self.search(at, Some(group), radius, hint)
     }
 
-    /// Whether any point, of any group, lies within `radius` of `at`.
-    pub fn any_within(&self, at: DVec3, radius: f64) -> bool {
-        self.search(at, None, radius, None, true).is_some()
+    /// The distance from `at` to the nearest point of any group, if within `radius`.
+    pub fn distance_within(&self, at: DVec3, radius: f64) -> Option<f64> {
+        self.search(at, None, radius, None).map(|f| f.distance)
     }
 
-    /// [`PointTree::nearest`] over the points of `group` (of every group for `None`),
-    /// stopping at the first point within `radius` if `first`.
+    /// [`PointTree::nearest`] over the points of `group` (of every group for `None`).
     fn search(
         &self,
         at: DVec3,
         group: Option<u32>,
         radius: f64,
         hint: Option<Found>,
-        first: bool,
     ) -> Option<Found> {
         if self.nodes.is_empty() {
             return None;
@@ -184,9 +182,6 @@ impl PointTree {
                     if d2 < best.0 || (d2 == best.0 && id < best.1) {
                         best = (d2, id, t as u32);
                     }
-                }
-                if first && best.1 != u32::MAX {
-                    break;
                 }
                 continue;
             }
@@ -239,8 +234,8 @@ mod tests {
     proptest! {
         /// Against looking at every point: the same point (the lowest id among equally
         /// near ones; points on a small lattice make exact ties common) and distance,
-        /// with and without a hint, whichever point the hint names; and `any_within` says
-        /// whether any group has a point there.
+        /// with and without a hint, whichever point the hint names; and `distance_within`
+        /// is the distance to the nearest point of any group.
         #[test]
         fn nearest_is_the_lowest_id_nearest_point_of_the_group(
             raw in prop::collection::vec((0i32..6, 0i32..6, 0i32..6, 0u32..3), 0..120),
@@ -259,8 +254,10 @@ mod tests {
                 let want = brute(&points, at, group, radius);
                 let plain = tree.nearest(at, group, radius, None);
                 prop_assert_eq!(plain.map(|f| (f.id, f.distance)), want);
-                let any = (0..3).any(|g| brute(&points, at, g, radius).is_some());
-                prop_assert_eq!(tree.any_within(at, radius), any);
+                let any = (0..3)
+                    .filter_map(|g| brute(&points, at, g, radius).map(|b| b.1))
+                    .reduce(f64::min);
+                prop_assert_eq!(tree.distance_within(at, radius), any);
                 // Any point as a hint: the tree's own record of it.
                 if !points.is_empty() {
                     let id = hint.index(points.len()) as u32;
