@@ -313,7 +313,7 @@ pub fn correct_labels_with(
     }
     let lattice = *grid.lattice();
     let clock = std::time::Instant::now();
-    let mut phase = [0.0f64; 5];
+    let mut phase = [0.0f64; 4];
 
     // Region nodes, in lattice order.
     let (nodes, index) =
@@ -512,15 +512,13 @@ pub fn correct_labels_with(
         .count();
     drop(slots);
     phase[3] = clock.elapsed().as_secs_f64();
-    phase[4] = clock.elapsed().as_secs_f64();
     // Where the time went (`RUST_LOG=grid_tracker=debug`): seconds since the start at the
     // end of each phase.
     tracing::debug!(
         nodes = phase[0],
         breaking_points = phase[1],
-        march = phase[2],
+        nearest_and_entries = phase[2],
         fallback = phase[3],
-        entries = phase[4],
         dense = matches!(index, NodeIndex::Dense { .. }),
         ?stats,
         "labels: seconds at the end of each phase"
