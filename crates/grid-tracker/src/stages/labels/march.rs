@@ -16,6 +16,7 @@ use std::hash::BuildHasherDefault;
 use glam::{DVec3, IVec3};
 
 use super::BreakingPoint;
+use super::nearest::nearest_of;
 use crate::stages::grid::tiles::TileHasher;
 
 /// The nearest breaking point known for a node, and its distance.
@@ -366,7 +367,7 @@ pub struct FarFieldStats {
 /// into ranges whose coarse cells share their z coordinate.
 ///
 /// 1. **Coarse**: the march resumes from every coarse node holding a point, over the
-///    coarse nodes only (block³ times fewer nodes).
+///    coarse nodes of its part only (block³ times fewer nodes).
 /// 2. **Gather**: every node beyond the band takes the nearest point of its part among
 ///    those held by the coarse nodes of the 3 × 3 × 3 coarse cells around its own and by
 ///    the band nodes next to its cell. The candidates are gathered once per coarse cell
@@ -408,7 +409,14 @@ pub fn march_far_field(
             marching.resume(slots, i);
         }
     }
-    marching.run(levels.coarse(), points, slots);
+    // Within each part only: coarse neighbours are a block apart, so they may lie across
+    // a gap between parts, and a point of one part must not reach (nor replace the exact
+    // point of) a node of another.
+    let coarse = Only {
+        nodes: levels.coarse(),
+        keep: |i, j| levels.part(i) == levels.part(j),
+    };
+    marching.run(&coarse, points, slots);
     stats.updates += marching.updates;
     drop(marching);
 
@@ -430,25 +438,13 @@ pub fn march_far_field(
                     let around = |visit: &mut dyn FnMut(u32)| levels.around(cell, visit);
                     let list = candidates.of(cell, centre, around, snapshot, points);
                     let (at, part) = (fine.position(i), levels.part(i));
-                    // A candidate `from` the centre is at least `from - offset` from the
-                    // node; the list is in increasing `from`, so the scan stops at the
-                    // first one that cannot beat the best (with a margin for rounding).
+                    // With a margin for rounding: the scan's bound must not cut too early.
                     let offset = at.distance(centre) * (1.0 + 1e-12) + 1e-300;
-                    let mut best = Slot::OPEN;
-                    for &(from, k) in list {
-                        if from - offset > best.distance {
-                            break;
-                        }
-                        if groups[k as usize] != part {
-                            continue;
-                        }
-                        let distance = at.distance(points[k as usize].position);
-                        if distance < best.distance || (distance == best.distance && k < best.point)
-                        {
-                            best = Slot { distance, point: k };
-                        }
+                    let position = |k: u32| points[k as usize].position;
+                    match nearest_of(list, at, offset, part, groups, position, f64::INFINITY) {
+                        Some((distance, point)) => Slot { distance, point },
+                        None => Slot::OPEN,
                     }
-                    best
                 })
                 .collect()
         })
@@ -477,7 +473,7 @@ pub fn march_far_field(
     }
     let only = Only {
         nodes: fine,
-        open: &open,
+        keep: |_, j: u32| open[j as usize],
     };
     let mut marching = Marching::new();
     for &i in &rest {
@@ -550,20 +546,20 @@ impl CellCandidates {
     }
 }
 
-/// The neighbours of `nodes` restricted to those with `open[j]`.
-struct Only<'a, N> {
+/// The neighbours `j` of each node `i` of `nodes` for which `keep(i, j)` holds.
+struct Only<'a, N, F> {
     nodes: &'a N,
-    open: &'a [bool],
+    keep: F,
 }
 
-impl<N: Nodes> Nodes for Only<'_, N> {
+impl<N: Nodes, F: Fn(u32, u32) -> bool> Nodes for Only<'_, N, F> {
     fn len(&self) -> usize {
         self.nodes.len()
     }
     #[inline]
     fn for_each_neighbour(&self, i: u32, mut offer: impl FnMut(u32, DVec3)) {
         self.nodes.for_each_neighbour(i, |j, at| {
-            if self.open[j as usize] {
+            if (self.keep)(i, j) {
                 offer(j, at);
             }
         });

@@ -68,41 +68,20 @@ pub struct TooManyNodes(pub usize);
 /// The corners of every flawed cell, in lattice order (z, then y, then x), and their
 /// index.
 pub fn region_nodes(region: &FlawedRegion) -> Result<(Vec<IVec3>, NodeIndex), TooManyNodes> {
-    let cells: Vec<IVec3> = region.cells().collect();
-    let Some((lo, hi)) = cells.iter().fold(None, |acc: Option<(IVec3, IVec3)>, &c| {
+    let Some((lo, hi)) = region.cells().fold(None, |acc: Option<(IVec3, IVec3)>, c| {
         Some(acc.map_or((c, c), |(lo, hi)| (lo.min(c), hi.max(c))))
     }) else {
         return Ok((Vec::new(), NodeIndex::default()));
     };
     let dims = hi + IVec3::splat(2) - lo;
     let volume = dims.as_i64vec3().element_product();
-    if volume > 0 && (volume as u64) <= (DENSE_RATIO as u64) * (cells.len() as u64) {
-        let volume = volume as usize;
-        if volume >= NONE as usize {
-            return Err(TooManyNodes(volume));
+    if volume > 0 && (volume as u64) <= (DENSE_RATIO as u64) * (region.len() as u64) {
+        if volume as u64 >= u64::from(NONE) {
+            return Err(TooManyNodes(volume as usize));
         }
-        // Mark corners, then number them in box order, which is lattice order.
-        let mut index = vec![NONE; volume];
-        let at = |p: IVec3| {
-            let d = p - lo;
-            d.x as usize + dims.x as usize * (d.y as usize + dims.y as usize * d.z as usize)
-        };
-        for &c in &cells {
-            for n in cell_corners(c) {
-                index[at(n)] = 0;
-            }
-        }
-        let mut nodes = Vec::new();
-        for (i, slot) in index.iter_mut().enumerate() {
-            if *slot != NONE {
-                *slot = nodes.len() as u32;
-                let (x, yz) = (i % dims.x as usize, i / dims.x as usize);
-                let (y, z) = (yz % dims.y as usize, yz / dims.y as usize);
-                nodes.push(lo + IVec3::new(x as i32, y as i32, z as i32));
-            }
-        }
-        return Ok((nodes, NodeIndex::Dense { lo, dims, index }));
+        return Ok(dense_nodes(region, lo, dims));
     }
+    let cells: Vec<IVec3> = region.cells().collect();
     let mut nodes: Vec<IVec3> = cells
         .par_iter()
         .flat_map_iter(|&c| cell_corners(c))
@@ -118,6 +97,78 @@ pub fn region_nodes(region: &FlawedRegion) -> Result<(Vec<IVec3>, NodeIndex), To
         .map(|(i, &n)| (n, i as u32))
         .collect();
     Ok((nodes, NodeIndex::Sparse(map)))
+}
+
+/// [`region_nodes`] over the box `[lo, lo + dims)`, which holds every corner of the
+/// region's cells and fewer than `u32::MAX` entries.
+///
+/// Why layer by layer: where solids overlap the region is a volume (millions of nodes at
+/// 2M triangles), and marking the 8 corners of every cell and then numbering the box was
+/// one sequential pass each. Here only the flawed cells are marked sequentially (one
+/// flag each); each layer of nodes then finds its corners from the two layers of cells
+/// it bounds, counts them, and numbers them from the counts of the layers below, in
+/// parallel.
+fn dense_nodes(region: &FlawedRegion, lo: IVec3, dims: IVec3) -> (Vec<IVec3>, NodeIndex) {
+    let (nx, ny) = (dims.x as usize, dims.y as usize);
+    let layer = nx * ny;
+    let at = |p: IVec3| {
+        let d = p - lo;
+        d.x as usize + nx * (d.y as usize + ny * d.z as usize)
+    };
+    // Flawed cells by their lowest corner (the box's last row, column and layer hold none).
+    let mut flawed = vec![false; layer * dims.z as usize];
+    for c in region.cells() {
+        flawed[at(c)] = true;
+    }
+    // A node is a corner of the cells at its own position minus 0 or 1 along each axis.
+    let flawed = &flawed;
+    let cell = |x: usize, y: usize, z: usize| flawed[x + nx * (y + ny * z)];
+    let mut index = vec![NONE; layer * dims.z as usize];
+    let counts: Vec<u32> = index
+        .par_chunks_mut(layer)
+        .enumerate()
+        .map(|(z, out)| {
+            let mut count = 0u32;
+            for y in 0..ny {
+                for x in 0..nx {
+                    let corner = (z.saturating_sub(1)..=z).any(|cz| {
+                        (y.saturating_sub(1)..=y)
+                            .any(|cy| cell(x, cy, cz) || (x > 0 && cell(x - 1, cy, cz)))
+                    });
+                    if corner {
+                        out[x + nx * y] = count;
+                        count += 1;
+                    }
+                }
+            }
+            count
+        })
+        .collect();
+    let bases: Vec<u32> = counts
+        .iter()
+        .scan(0u32, |acc, &c| {
+            let base = *acc;
+            *acc += c;
+            Some(base)
+        })
+        .collect();
+    let nodes: Vec<IVec3> = index
+        .par_chunks_mut(layer)
+        .zip(bases)
+        .enumerate()
+        .flat_map_iter(|(z, (out, base))| {
+            let mut layer_nodes = Vec::new();
+            for (k, slot) in out.iter_mut().enumerate() {
+                if *slot != NONE {
+                    *slot += base;
+                    let (x, y) = (k % nx, k / nx);
+                    layer_nodes.push(lo + IVec3::new(x as i32, y as i32, z as i32));
+                }
+            }
+            layer_nodes
+        })
+        .collect();
+    (nodes, NodeIndex::Dense { lo, dims, index })
 }
 
 #[cfg(test)]

@@ -296,14 +296,25 @@ fn solid_block(n: i32) -> (Vec<IVec3>, NodeIndex) {
 /// The nearest of `points` to `at` by looking at every one: its id (the lowest among
 /// equally near ones) and distance.
 fn exact_nearest(points: &[BreakingPoint], at: DVec3) -> (u32, f64) {
+    exact_nearest_of(points, at, |_| true)
+}
+
+/// [`exact_nearest`] among the points `keep` accepts, squared distances compared (as
+/// the stage does, so that points whose distances round to one value still tie to the
+/// nearer).
+fn exact_nearest_of(
+    points: &[BreakingPoint],
+    at: DVec3,
+    keep: impl Fn(usize) -> bool,
+) -> (u32, f64) {
     let mut best = (u32::MAX, f64::INFINITY);
     for (k, b) in points.iter().enumerate() {
-        let d = b.position.distance(at);
-        if d < best.1 {
-            best = (k as u32, d);
+        let d2 = (b.position - at).length_squared();
+        if keep(k) && d2 < best.1 {
+            best = (k as u32, d2);
         }
     }
-    best
+    (best.0, best.1.sqrt())
 }
 
 /// The nearest points of the stage (exact in the band, the far-field march beyond)
@@ -494,6 +505,64 @@ fn band_nodes_get_the_exact_nearest_of_scattered_points() {
 }
 
 proptest::proptest! {
+    /// The band's per-block candidate lists against looking at every point of the node's
+    /// part, on two slabs of nodes one missing layer apart (two parts, and blocks that
+    /// straddle both, which ask the tree per node) with points on a half-cell lattice (so
+    /// that exact ties are everywhere): every node whose nearest point of its part is
+    /// within the band gets exactly it (the lowest id among equally near ones), and no
+    /// other node gets any.
+    #[test]
+    fn band_candidates_give_the_exact_nearest_of_the_part(
+        raw in proptest::collection::vec((0i32..27, 0i32..19, 0i32..19), 1..40),
+    ) {
+        let lattice = crate::stages::grid::Lattice {
+            origin: DVec3::new(0.25, -0.5, 0.125),
+            cell_size: 0.5,
+        };
+        // x in 0..=5 and 7..=13: the gap at x = 6 parts them (26-neighbours are one apart).
+        let mut nodes = Vec::new();
+        for z in 0..10 {
+            for y in 0..10 {
+                for x in (0..14).filter(|&x| x != 6) {
+                    nodes.push(IVec3::new(x, y, z));
+                }
+            }
+        }
+        let index = NodeIndex::Sparse(
+            nodes.iter().enumerate().map(|(i, &p)| (p, i as u32)).collect(),
+        );
+        // Points on the half-cell lattice, each seeded at the node at or below it.
+        let points: Vec<BreakingPoint> = raw
+            .iter()
+            .map(|&(x, y, z)| BreakingPoint {
+                position: lattice.origin + DVec3::new(x as f64, y as f64, z as f64) * 0.5 * lattice.cell_size,
+                label: Label::new(1 + (x % 3) as u32),
+            })
+            .collect();
+        let seed_of: Vec<Option<usize>> = raw
+            .iter()
+            .map(|&(x, y, z)| {
+                let p = IVec3::new(x.div_euclid(2), y.div_euclid(2), z.div_euclid(2));
+                index.get(p).map(|i| i as usize)
+            })
+            .collect();
+        let part_of = |p: IVec3| p.x > 6;
+        let (slots, _) = nearest_points(&nodes, &index, &lattice, &points, |k| seed_of[k]);
+        let band = FAR_FIELD_BAND_CELLS * lattice.cell_size;
+        for (i, &p) in nodes.iter().enumerate() {
+            let at = lattice.node_position(p);
+            let same_part = |k: usize| seed_of[k].is_some_and(|j| part_of(nodes[j]) == part_of(p));
+            let want = exact_nearest_of(&points, at, same_part);
+            if want.1 <= band {
+                proptest::prop_assert_eq!((slots[i].point, slots[i].distance), want, "node {}", p);
+            } else {
+                // Beyond the band: the far field's, but never a point of the other part.
+                let k = slots[i].point as usize;
+                proptest::prop_assert!(k >= points.len() || same_part(k), "node {}", p);
+            }
+        }
+    }
+
     /// The region's parts by runs against union–find over every node and its 26
     /// neighbours, on random sparse node sets (thin diagonal contacts are common): the
     /// same part, named by its smallest node, for every node.
@@ -520,5 +589,37 @@ proptest::proptest! {
             .map(|i| mesh_core::union_find::find(&mut parent, i))
             .collect();
         proptest::prop_assert_eq!(components(&nodes), want);
+    }
+}
+
+/// The status carried along runs of x neighbours against looking each node up on its
+/// own ([`Materials::material_at`] walks back to the surface): the same id and label for
+/// every node of the half of the overlaps' box beyond their centre, whose rows start deep
+/// inside a solid (so a run must not take over the end of the row before, outside).
+#[test]
+fn status_carried_along_runs_matches_the_walk_per_node() {
+    for (mesh, _) in near_and_far_overlaps() {
+        let r = run(&mesh, 0.1, false);
+        let [lo, hi] = r.grid.cell_bounds().unwrap();
+        let mut nodes = Vec::new();
+        for z in lo.z..=hi.z + 1 {
+            for y in lo.y..=hi.y + 1 {
+                for x in (lo.x + hi.x) / 2 - 3..=hi.x + 1 {
+                    nodes.push(IVec3::new(x, y, z));
+                }
+            }
+        }
+        let (ids, status) = physical_status(&r.grid, &r.mats, &nodes);
+        let mut inside = 0;
+        for (i, &p) in nodes.iter().enumerate() {
+            let id = r.grid.node_id(p);
+            let want = match id {
+                Some(n) => r.mats.physical_label(n),
+                None => r.mats.material_at(&r.grid, p).label(),
+            };
+            inside += usize::from(id.is_none() && want != Some(Label::OUTSIDE));
+            assert_eq!((ids[i], status[i]), (id, want), "node {p}");
+        }
+        assert!(inside > 100, "{inside} unallocated nodes inside");
     }
 }

@@ -218,10 +218,14 @@ impl Materials {
     /// vector of the nearest allocated node below it along x (no mesh lies between, see
     /// [`Grid::node_at_or_below_x`]), or `e_0` when there is none.
     pub fn material_at(&self, grid: &Grid, p: IVec3) -> MaterialRef {
-        match grid.node_id(p).or_else(|| grid.node_at_or_below_x(p)) {
-            Some(n) => self.node[n.idx()],
-            None => outside(),
-        }
+        self.material_from(grid.node_id(p).or_else(|| grid.node_at_or_below_x(p)))
+    }
+
+    /// The vector an unallocated node takes from `source`, its nearest allocated node
+    /// at or below it along x ([`Materials::material_at`]), or `e_0` for none.
+    #[inline]
+    pub fn material_from(&self, source: Option<NodeId>) -> MaterialRef {
+        source.map_or_else(outside, |n| self.node[n.idx()])
     }
 
     /// Sizes and memory.
