@@ -66,6 +66,52 @@ pub struct FixPoint {
     /// a stage that labels every node of it (labels) grows with it, not with the surface.
     #[serde(default)]
     pub flawed_cells: Option<usize>,
+    /// Runs of `fix` the times are the minimum of (`bench scaling --repeat`; 1 in records
+    /// written before it existed).
+    #[serde(default = "one_run")]
+    pub runs: usize,
+}
+
+fn one_run() -> usize {
+    1
+}
+
+impl FixPoint {
+    /// This point and `other`, a run of `fix` on the same input, as one: each time the
+    /// smaller (noise on a shared machine only ever adds time), peak memory the larger,
+    /// and a failure of either run the point's failure.
+    pub fn merge(self, other: FixPoint) -> FixPoint {
+        if !self.success {
+            return self;
+        }
+        if !other.success {
+            return other;
+        }
+        let min = |a: Option<f64>, b: Option<f64>| match (a, b) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        };
+        let mut stages = self.stages;
+        for s in other.stages {
+            match stages.iter_mut().find(|t| t.stage == s.stage) {
+                Some(t) => t.seconds = t.seconds.min(s.seconds),
+                None => stages.push(s),
+            }
+        }
+        let peak_rss_mib = match (self.peak_rss_mib, other.peak_rss_mib) {
+            (Some(a), Some(b)) => Some(a.max(b)),
+            (a, b) => a.or(b),
+        };
+        FixPoint {
+            wall_seconds: self.wall_seconds.min(other.wall_seconds),
+            stages,
+            fix_seconds: min(self.fix_seconds, other.fix_seconds),
+            peak_rss_mib,
+            mib_per_million_triangles: per_million_triangles(peak_rss_mib, self.triangles_in),
+            runs: self.runs + other.runs,
+            ..self
+        }
+    }
 }
 
 /// One `steps` point.
@@ -184,6 +230,8 @@ pub struct ScalingPlan {
     pub out: PathBuf,
     /// Seed (copies' rotations, sphere placement).
     pub seed: u64,
+    /// Runs of each `fix` point ([`FixPoint::merge`]).
+    pub repeat: usize,
 }
 
 /// One `fix` point: writes the input, runs `surftrack fix` on it in a child.
@@ -206,9 +254,43 @@ fn fix_point(exe: &Path, plan: &ScalingPlan, target: usize) -> anyhow::Result<Fi
     mesh_core::io::write_mesh(&input, &input_path)?;
     // The parent holds no copy of a 5M-triangle input while the child runs.
     drop((input, base));
+    let mut point = fix_run(
+        exe,
+        plan,
+        &dir,
+        &input_path,
+        target,
+        resolution,
+        triangles_in,
+    );
+    for _ in 1..plan.repeat {
+        let again = fix_run(
+            exe,
+            plan,
+            &dir,
+            &input_path,
+            target,
+            resolution,
+            triangles_in,
+        );
+        point = point.merge(again);
+    }
+    Ok(point)
+}
+
+/// One run of `surftrack fix` on the point's input, in a watched child.
+fn fix_run(
+    exe: &Path,
+    plan: &ScalingPlan,
+    dir: &Path,
+    input_path: &Path,
+    target: usize,
+    resolution: u32,
+    triangles_in: usize,
+) -> FixPoint {
     let args: Vec<OsString> = vec![
         "fix".into(),
-        input_path.clone().into(),
+        input_path.into(),
         dir.join("output.ply").into(),
         "--json".into(),
         "--binary".into(),
@@ -235,6 +317,7 @@ fn fix_point(exe: &Path, plan: &ScalingPlan, target: usize) -> anyhow::Result<Fi
             .then(|| bytes_to_mib(watched.sampled_peak_rss_bytes)),
         mib_per_million_triangles: None,
         flawed_cells: None,
+        runs: 1,
     };
     match watched.ending {
         WatchedEnding::Exited(code) => {
@@ -278,7 +361,7 @@ fn fix_point(exe: &Path, plan: &ScalingPlan, target: usize) -> anyhow::Result<Fi
         WatchedEnding::Failed(message) => point.failure = Some(message),
     }
     point.mib_per_million_triangles = per_million_triangles(point.peak_rss_mib, triangles_in);
-    Ok(point)
+    point
 }
 
 /// One step point: the `spheres` scene in a child `run`.
@@ -502,7 +585,32 @@ mod tests {
             mib_per_million_triangles: Some(1000.0),
             // A region growing as n^1.5 while labels time grows as n: slope 2/3 against it.
             flawed_cells: Some((n as f64).powf(1.5) as usize),
+            runs: 1,
         };
+        // Runs merge stage by stage to the smaller time, memory to the larger; a failed
+        // run fails the point.
+        let mut slow = point(1000, 3.0, true);
+        slow.stages.push(StageSeconds {
+            stage: "cut".into(),
+            seconds: 0.5,
+        });
+        slow.peak_rss_mib = Some(7.0);
+        let merged = point(1000, 1.0, true).merge(slow);
+        assert_eq!(
+            (merged.runs, merged.wall_seconds, merged.peak_rss_mib),
+            (2, 1.0, Some(7.0))
+        );
+        let seconds: Vec<(&str, f64)> = merged
+            .stages
+            .iter()
+            .map(|s| (s.stage.as_str(), s.seconds))
+            .collect();
+        assert_eq!(seconds, [("labels", 1.0), ("cut", 0.5)]);
+        assert!(
+            !point(1000, 1.0, true)
+                .merge(point(1000, 0.5, false))
+                .success
+        );
         let fix = [
             point(1000, 1.0, true),
             point(2000, 2.0, true),

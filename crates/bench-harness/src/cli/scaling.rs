@@ -15,7 +15,7 @@ use crate::scaling::{ScalingPlan, scaling};
 const EXAMPLES: &str = "\
 Examples:
   surftrack bench scaling                                   # fix 100k..2M, spheres 20..200
-  surftrack bench scaling --fix-triangles 100000,300000,1000000 --spheres 0
+  surftrack bench scaling --fix-triangles 100000,300000,1000000 --spheres 0 --repeat 3
   surftrack bench scaling --fix-triangles 5000000 --max-memory-mib 20000 --spheres 0
   surftrack bench scaling --mesh bunny.obj --fix-triangles 337000,1350000,5400000 --spheres 0
 
@@ -62,6 +62,11 @@ pub struct ScalingArgs {
     /// Resident memory cap per point, MiB (Linux); 0 = off.
     #[arg(long, default_value_t = 16384)]
     pub max_memory_mib: u64,
+    /// Runs of each `fix` point: each stage's time is its minimum over the runs (noise on
+    /// a shared machine only adds time, and a single run at 2M triangles varies by a
+    /// third), peak memory the largest.
+    #[arg(long, default_value_t = 1)]
+    pub repeat: usize,
     /// Seed (rotations of the copies, sphere placement).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -80,8 +85,8 @@ pub(super) fn run(args: &ScalingArgs) -> anyhow::Result<ExitCode> {
     if !(args.timeout.is_finite() && args.timeout > 0.0) {
         bail!("--timeout must be a positive number of seconds");
     }
-    if args.copies == 0 || args.steps == 0 {
-        bail!("--copies and --steps must be at least 1");
+    if args.copies == 0 || args.steps == 0 || args.repeat == 0 {
+        bail!("--copies, --steps and --repeat must be at least 1");
     }
     let base_mesh = match &args.mesh {
         Some(path) => {
@@ -113,6 +118,7 @@ pub(super) fn run(args: &ScalingArgs) -> anyhow::Result<ExitCode> {
         },
         out: args.out.clone(),
         seed: args.seed,
+        repeat: args.repeat,
     };
     let exe = std::env::current_exe().context("cannot find the surftrack executable")?;
     let quiet = args.quiet || args.json;

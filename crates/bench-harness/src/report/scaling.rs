@@ -30,6 +30,14 @@ pub fn scaling_markdown(record: &ScalingRecord) -> String {
                 |name| format!("{name}, subdivided to size")
             )
         );
+        let runs = record.fix.iter().map(|p| p.runs).max().unwrap_or(1);
+        if runs > 1 {
+            let _ = writeln!(
+                md,
+                "Each time is the smallest of up to {runs} runs of the point (`--repeat`); \
+                 peak memory the largest.\n"
+            );
+        }
         let _ = write!(
             md,
             "| input triangles | output triangles | flawed cells | ok | wall s |"
