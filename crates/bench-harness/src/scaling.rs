@@ -87,8 +87,9 @@ impl FixPoint {
         if !other.success {
             return other;
         }
-        let min = |a: Option<f64>, b: Option<f64>| match (a, b) {
-            (Some(a), Some(b)) => Some(a.min(b)),
+        // Either figure when only one run has it.
+        let both = |a: Option<f64>, b: Option<f64>, pick: fn(f64, f64) -> f64| match (a, b) {
+            (Some(a), Some(b)) => Some(pick(a, b)),
             (a, b) => a.or(b),
         };
         let mut stages = self.stages;
@@ -98,14 +99,11 @@ impl FixPoint {
                 None => stages.push(s),
             }
         }
-        let peak_rss_mib = match (self.peak_rss_mib, other.peak_rss_mib) {
-            (Some(a), Some(b)) => Some(a.max(b)),
-            (a, b) => a.or(b),
-        };
+        let peak_rss_mib = both(self.peak_rss_mib, other.peak_rss_mib, f64::max);
         FixPoint {
             wall_seconds: self.wall_seconds.min(other.wall_seconds),
             stages,
-            fix_seconds: min(self.fix_seconds, other.fix_seconds),
+            fix_seconds: both(self.fix_seconds, other.fix_seconds, f64::min),
             peak_rss_mib,
             mib_per_million_triangles: per_million_triangles(peak_rss_mib, self.triangles_in),
             runs: self.runs + other.runs,
@@ -254,17 +252,8 @@ fn fix_point(exe: &Path, plan: &ScalingPlan, target: usize) -> anyhow::Result<Fi
     mesh_core::io::write_mesh(&input, &input_path)?;
     // The parent holds no copy of a 5M-triangle input while the child runs.
     drop((input, base));
-    let mut point = fix_run(
-        exe,
-        plan,
-        &dir,
-        &input_path,
-        target,
-        resolution,
-        triangles_in,
-    );
-    for _ in 1..plan.repeat {
-        let again = fix_run(
+    let run = || {
+        fix_run(
             exe,
             plan,
             &dir,
@@ -272,9 +261,9 @@ fn fix_point(exe: &Path, plan: &ScalingPlan, target: usize) -> anyhow::Result<Fi
             target,
             resolution,
             triangles_in,
-        );
-        point = point.merge(again);
-    }
+        )
+    };
+    let point = (1..plan.repeat).fold(run(), |point, _| point.merge(run()));
     Ok(point)
 }
 
