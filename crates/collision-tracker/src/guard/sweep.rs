@@ -249,18 +249,12 @@ pub(crate) fn check_sweep(
     } else {
         s.pool_bounds = None;
     }
+    let select_near = |s: &mut Scratch, bounds: &Aabb, pick| {
+        nearby(s, index, mesh, edit, motion, pooled, bounds, pick);
+    };
     for (i, t) in motion.swept.iter().enumerate() {
         let bounds = t.bounds().inflated(margin);
-        nearby(
-            s,
-            index,
-            mesh,
-            edit,
-            motion,
-            pooled,
-            &bounds,
-            select_vertices,
-        );
+        select_near(s, &bounds, select_vertices);
         // Static vertices against the moving triangle.
         for &(k, p) in &s.vertices {
             if t.has(k) {
@@ -321,16 +315,7 @@ pub(crate) fn check_sweep(
     for m in 0..s.movers.len() {
         let (key, x0, x1) = s.movers[m];
         let bounds = Aabb::from_points(&[x0, x1]).inflated(margin);
-        nearby(
-            s,
-            index,
-            mesh,
-            edit,
-            motion,
-            pooled,
-            &bounds,
-            select_triangles,
-        );
+        select_near(s, &bounds, select_triangles);
         for &(skey, q) in &s.near {
             if skey.contains(&key) {
                 continue;
@@ -359,7 +344,7 @@ pub(crate) fn check_sweep(
     for e in 0..s.moving_edges.len() {
         let (key, x0, x1) = s.moving_edges[e];
         let bounds = Aabb::from_points(&[x0[0], x0[1], x1[0], x1[1]]).inflated(margin);
-        nearby(s, index, mesh, edit, motion, pooled, &bounds, select_edges);
+        select_near(s, &bounds, select_edges);
         for &(skey, q) in &s.edges {
             if skey.contains(&key[0]) || skey.contains(&key[1]) {
                 continue;
