@@ -9,7 +9,10 @@ use super::face::{FaceScratch, intersect_face};
 use super::{BoundaryFace, CellFlaws, FlawError, FlawedRegion};
 use crate::stages::grid::Grid;
 use crate::stages::grid::primitives::{GridEdge, cell_faces};
-use crate::stages::grid::tiles::{TILE, TILE_LOG2, split};
+use crate::stages::grid::tiles::{
+    TILE, TILE_LOG2, TILE_VOLUME, TileMap, TileMask, across_face, box_mask, dilate, join,
+    mask_iter, split,
+};
 use crate::stages::materials::Materials;
 
 /// Floods the flawed region from unallocated non-physical seed cells through unallocated
@@ -21,13 +24,18 @@ use crate::stages::materials::Materials;
 /// (allocated, non-physical) nodes and were flagged from those. Termination: a
 /// non-physical unallocated component is enclosed by the band (far from the mesh the
 /// vector is `e_0`), hence inside [`Grid::cell_bounds`], where the flood is clamped.
-/// Tiles without allocated cells join whole, so a large overlap volume costs per tile,
-/// not per cell.
+///
+/// The flood runs on tiles, never on single cells, because the volume inside large
+/// overlaps grows faster than the mesh (a flood by cells was most of this stage at 2M
+/// triangles): a tile without allocated cells joins whole, and inside a partly allocated
+/// tile the flood spreads by bit operations on the tile's 512-cell mask ([`dilate`])
+/// from the cells it entered by, then hands the cells on its six faces to the
+/// neighbouring tiles ([`across_face`]).
 ///
 /// A broken mesh (holes: the materials have flawed nodes) breaks the constancy argument —
 /// a hole's "shadow" along a ray is non-physical up to infinity — so then each cell's own
-/// vector is checked ([`Materials::material_at`]) before it joins. The clamp and
-/// [`FlawError::TooManyUnallocated`] bound the work either way.
+/// vector is checked ([`Materials::material_at`]) before it joins (once per cell, when
+/// the flood first enters its tile). The clamp and [`FlawError::TooManyUnallocated`] bound the work either way.
 pub(crate) fn flood(
     grid: &Grid,
     materials: &Materials,
@@ -39,79 +47,77 @@ pub(crate) fn flood(
         return Ok(());
     };
     let check = !materials.flawed_nodes().is_empty();
-    let inside = |c: IVec3| c.cmpge(lo).all() && c.cmple(hi).all();
-    let joins = |c: IVec3| {
-        inside(c)
-            && grid.cell_id(c).is_none()
-            && (!check || !materials.material_at(grid, c).is_physical())
-    };
-    // A whole tile without allocated cells, inside the bounds, is one face-connected block
-    // of unallocated cells: it joins at once (not with broken input, checked per cell).
-    let whole_uncached = |t: IVec3| {
-        !check
-            && inside(t << TILE_LOG2)
-            && inside((t << TILE_LOG2) + IVec3::splat(TILE - 1))
-            && grid.tile_is_empty(t)
-    };
-    // Neighbours mostly share the tile of the cell they come from: remember the last one.
-    let last = std::cell::Cell::new((IVec3::MAX, false));
-    let whole = |t: IVec3| {
-        let (lt, lw) = last.get();
-        if lt == t {
-            return lw;
+    // Per tile, the cells that may join: unallocated, inside the bounds, and (broken
+    // input) non-physical, each cell's vector looked up once.
+    let mut checked: TileMap<TileMask> = TileMap::default();
+    let mut open = |t: IVec3| -> TileMask {
+        if let Some(m) = checked.get(&t) {
+            return *m;
         }
-        let w = whole_uncached(t);
-        last.set((t, w));
-        w
-    };
-    enum Item {
-        Cell(IVec3),
-        Tile(IVec3),
-    }
-    let mut stack: Vec<Item> = Vec::new();
-    // Queues `c`, or its whole tile; returns the number of cells added.
-    let add = |region: &mut FlawedRegion, stack: &mut Vec<Item>, c: IVec3| {
-        let t = split(c).0;
-        if whole(t) {
-            if !region.cells.contains(t << TILE_LOG2) {
-                stack.push(Item::Tile(t));
-                return region.cells.insert_tile(t);
+        let base = t << TILE_LOG2;
+        let allocated = grid.tile_cells(t);
+        let mut m = box_mask(lo - base, hi - base);
+        for (w, a) in m.iter_mut().zip(allocated) {
+            *w &= !a;
+        }
+        if check {
+            for l in mask_iter(&m.clone()) {
+                if materials.material_at(grid, join(t, l)).is_physical() {
+                    m[l >> 6] &= !(1 << (l & 63));
+                }
             }
-        } else if joins(c) && region.cells.insert(c) {
-            stack.push(Item::Cell(c));
-            return 1;
+            checked.insert(t, m);
         }
-        0
+        m
     };
-    for &s in seeds {
-        region.unallocated += add(region, &mut stack, s);
+    let full = [u64::MAX; TILE as usize];
+    // Tiles to spread from, with the cells that just joined there (a whole tile's all).
+    let mut stack: Vec<(IVec3, TileMask)> = Vec::new();
+    // Cells of `t` that `seeds` reaches: the whole tile when it may join whole, else the
+    // flood inside it; new cells join the region and the tile is queued.
+    let mut enter =
+        |region: &mut FlawedRegion, stack: &mut Vec<(IVec3, TileMask)>, t, seeds: &TileMask| {
+            let allowed = open(t);
+            let joined = region.cells.tile(t);
+            let free = |m: &TileMask| -> TileMask {
+                std::array::from_fn(|z| m[z] & allowed[z] & !joined[z])
+            };
+            let mut reached = free(seeds);
+            if reached.iter().all(|&w| w == 0) {
+                return;
+            }
+            if allowed == full {
+                reached = free(&full);
+            } else {
+                // At most one step per cell of the tile.
+                for _ in 0..TILE_VOLUME {
+                    let next = free(&dilate(&reached));
+                    if next == reached {
+                        break;
+                    }
+                    reached = next;
+                }
+            }
+            region.unallocated += region.cells.insert_mask(t, &reached);
+            stack.push((t, reached));
+        };
+    for &c in seeds {
+        let (t, l) = split(c);
+        let mut m = [0u64; TILE as usize];
+        m[l >> 6] = 1 << (l & 63);
+        enter(region, &mut stack, t, &m);
     }
-    while let Some(item) = stack.pop() {
+    while let Some((t, reached)) = stack.pop() {
         if region.unallocated > limit {
             return Err(FlawError::TooManyUnallocated { limit });
         }
-        match item {
-            Item::Cell(c) => {
-                for (_, nb) in cell_faces(c) {
-                    region.unallocated += add(region, &mut stack, nb);
-                }
-            }
-            Item::Tile(t) => {
-                // The cells just across each of the tile's six faces.
-                let base = t << TILE_LOG2;
-                for axis in 0..3 {
-                    let (b, c) = ((axis + 1) % 3, (axis + 2) % 3);
-                    for (side, offset) in [(0, -1), (TILE - 1, 1)] {
-                        for u in 0..TILE {
-                            for v in 0..TILE {
-                                let mut nb = base;
-                                nb[axis] += side + offset;
-                                nb[b] += u;
-                                nb[c] += v;
-                                region.unallocated += add(region, &mut stack, nb);
-                            }
-                        }
-                    }
+        for axis in 0..3 {
+            for positive in [false, true] {
+                let across = across_face(&reached, axis, positive);
+                if across.iter().any(|&w| w != 0) {
+                    let mut step = IVec3::ZERO;
+                    step[axis] = if positive { 1 } else { -1 };
+                    enter(region, &mut stack, t + step, &across);
                 }
             }
         }

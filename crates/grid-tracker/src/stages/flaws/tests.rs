@@ -326,11 +326,7 @@ fn growth_spreads_along_shallow_complex_edges() {
 /// including whole empty tiles inside a large overlap.
 #[test]
 fn flood_takes_exactly_the_non_physical_unallocated_cells() {
-    let mesh = union(&[
-        sphere(3, DVec3::new(-0.35, 0.0, 0.0), 1.0, 0, 1),
-        sphere(3, DVec3::new(0.4, 0.02, 0.01), 0.95, 0, 2),
-    ]);
-    let r = run(&mesh, 0.04, 5);
+    let r = run(&lens(false), 0.04, 5);
     let [lo, hi] = r.grid.cell_bounds().unwrap();
     let mut empty_lens_tiles = 0;
     let mut unallocated_np = 0;
@@ -360,4 +356,68 @@ fn flood_takes_exactly_the_non_physical_unallocated_cells() {
         "no whole tile inside the lens: the tile path went untested"
     );
     assert_eq!(r.region.stats().unallocated_cells, unallocated_np);
+}
+
+/// The flood's closure, which holds with broken input too (where each cell's vector is
+/// checked): every unallocated flawed cell inside the bounds is non-physical, and every
+/// unallocated non-physical cell inside the bounds with a face on one is flawed. Returns
+/// the number of unallocated flawed cells.
+fn assert_flood_closed(r: &Run) -> usize {
+    let [lo, hi] = r.grid.cell_bounds().unwrap();
+    let inside = |c: IVec3| c.cmpge(lo).all() && c.cmple(hi).all();
+    let joins = |c: IVec3| {
+        inside(c) && r.grid.cell_id(c).is_none() && !r.mats.material_at(&r.grid, c).is_physical()
+    };
+    // Cells that joined otherwise (the growth's): not the flood's.
+    let loose: std::collections::HashSet<IVec3> = r.region.loose.iter().map(|l| l.0).collect();
+    let mut flooded = 0;
+    for z in lo.z..=hi.z {
+        for y in lo.y..=hi.y {
+            for x in lo.x..=hi.x {
+                let c = IVec3::new(x, y, z);
+                if r.grid.cell_id(c).is_some() || !r.region.is_flawed(c) || loose.contains(&c) {
+                    continue;
+                }
+                flooded += 1;
+                assert!(joins(c), "cell {c} flooded but physical");
+                for axis in 0..3 {
+                    for d in [-1, 1] {
+                        let mut nb = c;
+                        nb[axis] += d;
+                        assert!(
+                            !joins(nb) || r.region.is_flawed(nb),
+                            "cell {nb} next to flooded {c} left out"
+                        );
+                    }
+                }
+            }
+        }
+    }
+    flooded
+}
+
+/// Two unit spheres overlapping in a lens several tiles wide; with `holed`, the first
+/// misses a triangle, so the materials have flawed nodes.
+fn lens(holed: bool) -> LabeledMesh {
+    let a = sphere(3, DVec3::new(-0.35, 0.0, 0.0), 1.0, 0, 1);
+    let a = if holed {
+        let (p, t, l) = a.to_raw();
+        LabeledMesh::from_raw(p, &t[3..], &l[3..]).unwrap()
+    } else {
+        a
+    };
+    union(&[a, sphere(3, DVec3::new(0.4, 0.02, 0.01), 0.95, 0, 2)])
+}
+
+/// The flood by tile masks takes a closed set of cells on both paths: uniform vectors
+/// (whole tiles and masks) and broken input (each cell's vector checked), across tile
+/// faces in every direction.
+#[test]
+fn the_flood_is_closed_with_and_without_broken_input() {
+    let r = run(&lens(false), 0.04, 5);
+    assert!(r.mats.flawed_nodes().is_empty());
+    assert!(assert_flood_closed(&r) > 1000);
+    let r = run(&lens(true), 0.04, 5);
+    assert!(!r.mats.flawed_nodes().is_empty());
+    assert!(assert_flood_closed(&r) > 1000);
 }

@@ -115,6 +115,57 @@ fn shift_y(m: u64) -> u64 {
     m << 8
 }
 
+/// Bits with x = 7 in a z-slice word.
+const COL7: u64 = COL0 << 7;
+
+/// The cells of a tile face-adjacent to a cell of `m`, and `m` itself (within the tile).
+pub fn dilate(m: &TileMask) -> TileMask {
+    let mut out = [0u64; TILE as usize];
+    for (z, o) in out.iter_mut().enumerate() {
+        let w = m[z];
+        *o = w | shift_x(w) | ((w >> 1) & !COL7) | shift_y(w) | (w >> 8);
+        if z > 0 {
+            *o |= m[z - 1];
+        }
+        if z + 1 < TILE as usize {
+            *o |= m[z + 1];
+        }
+    }
+    out
+}
+
+/// The cells with local coordinates in `[lo, hi]` (inclusive, per axis, clamped to the
+/// tile); empty when the range is empty on some axis.
+pub fn box_mask(lo: IVec3, hi: IVec3) -> TileMask {
+    let (lo, hi) = (lo.max(IVec3::ZERO), hi.min(IVec3::splat(TILE - 1)));
+    let mut out = [0u64; TILE as usize];
+    if lo.cmpgt(hi).any() {
+        return out;
+    }
+    let row = (0xffu64 >> (TILE - 1 - (hi.x - lo.x))) << lo.x;
+    let slice = (lo.y..=hi.y).fold(0u64, |acc, y| acc | row << (8 * y));
+    for w in &mut out[lo.z as usize..=hi.z as usize] {
+        *w = slice;
+    }
+    out
+}
+
+/// The cells of the neighbouring tile in direction `(axis, positive)` that share a face
+/// with a cell of `m`: `m`'s cells on that side of the tile, moved across.
+pub fn across_face(m: &TileMask, axis: usize, positive: bool) -> TileMask {
+    let mut out = [0u64; TILE as usize];
+    let last = TILE as usize - 1;
+    match (axis, positive) {
+        (0, true) => out = m.map(|w| (w & COL7) >> 7),
+        (0, false) => out = m.map(|w| (w & COL0) << 7),
+        (1, true) => out = m.map(|w| w >> 56),
+        (1, false) => out = m.map(|w| w << 56),
+        (_, true) => out[0] = m[last],
+        (_, false) => out[last] = m[0],
+    }
+    out
+}
+
 /// The node mask of a tile: node `(x, y, z)` is set when one of the eight cells
 /// `(x − {0,1}, y − {0,1}, z − {0,1})` is set — the corners of the occupied cells.
 /// `cells(o)` gives the cell mask of the tile at offset `o ∈ {−1, 0}³` from this one
@@ -227,6 +278,23 @@ impl CellSet {
         new
     }
 
+    /// Adds the cells of `mask` to tile `tile`; returns how many were new.
+    pub fn insert_mask(&mut self, tile: IVec3, mask: &TileMask) -> usize {
+        let m = self.tiles.entry(tile).or_insert([0; TILE as usize]);
+        let mut new = 0;
+        for (w, add) in m.iter_mut().zip(mask) {
+            new += (add & !*w).count_ones() as usize;
+            *w |= add;
+        }
+        self.len += new;
+        new
+    }
+
+    /// The cells of tile `tile` in the set (none when the tile was never touched).
+    pub fn tile(&self, tile: IVec3) -> TileMask {
+        self.tiles.get(&tile).copied().unwrap_or([0; TILE as usize])
+    }
+
     /// Whether `c` is in the set.
     pub fn contains(&self, c: IVec3) -> bool {
         let (t, l) = split(c);
@@ -290,6 +358,79 @@ mod tests {
         }
         assert_eq!(mask_iter(&m).collect::<Vec<_>>(), set);
         assert_eq!(mask_count(&m), 5);
+    }
+
+    /// The flood's mask operations, cell by cell: `dilate` adds exactly the face
+    /// neighbours inside the tile, `across_face` moves exactly the cells on one face to
+    /// the touching cells of the next tile, `box_mask` holds exactly the box's cells.
+    #[test]
+    fn flood_masks_match_cell_by_cell() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let cell = |l: usize| join(IVec3::ZERO, l);
+        let holds = |m: &TileMask, c: IVec3| {
+            c.cmpge(IVec3::ZERO).all()
+                && c.cmplt(IVec3::splat(TILE)).all()
+                && mask_get(m, split(c).1)
+        };
+        for _ in 0..50 {
+            let mut m = [0u64; TILE as usize];
+            for _ in 0..rng.random_range(1..40) {
+                mask_set(&mut m, rng.random_range(0..TILE_VOLUME));
+            }
+            let d = dilate(&m);
+            for l in 0..TILE_VOLUME {
+                let c = cell(l);
+                let want = holds(&m, c)
+                    || (0..3).any(|a| {
+                        [-1, 1].into_iter().any(|s| {
+                            let mut n = c;
+                            n[a] += s;
+                            holds(&m, n)
+                        })
+                    });
+                assert_eq!(mask_get(&d, l), want, "dilate at {c}");
+            }
+            for axis in 0..3 {
+                for positive in [false, true] {
+                    let a = across_face(&m, axis, positive);
+                    let mut step = IVec3::ZERO;
+                    step[axis] = if positive { TILE } else { -TILE };
+                    for l in 0..TILE_VOLUME {
+                        // Cell c of the next tile touches cell c - step ± 1 along axis of
+                        // this one, which is in the tile only on the shared face.
+                        let c = cell(l);
+                        let mut from = c + step;
+                        from[axis] += if positive { -1 } else { 1 };
+                        assert_eq!(
+                            mask_get(&a, l),
+                            holds(&m, from),
+                            "across {axis} {positive} at {c}"
+                        );
+                    }
+                }
+            }
+            let lo = IVec3::new(
+                rng.random_range(-2..8),
+                rng.random_range(-2..8),
+                rng.random_range(-2..8),
+            );
+            let hi = lo
+                + IVec3::new(
+                    rng.random_range(-1..9),
+                    rng.random_range(-1..9),
+                    rng.random_range(-1..9),
+                );
+            let b = box_mask(lo, hi);
+            for l in 0..TILE_VOLUME {
+                let c = cell(l);
+                assert_eq!(
+                    mask_get(&b, l),
+                    c.cmpge(lo).all() && c.cmple(hi).all(),
+                    "box at {c}"
+                );
+            }
+        }
     }
 
     #[test]
