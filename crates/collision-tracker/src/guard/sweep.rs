@@ -177,7 +177,9 @@ fn select_edges(s: &mut Scratch, bounds: &Aabb) {
 }
 
 /// The static elements near `bounds` that `pick` selects: from the edit's pool when it
-/// has one, else from a query of their own.
+/// has one, else from a query of their own (an edit of more than [`MAX_POOLED`] swept
+/// triangles, rare, then queries the index once per swept triangle, moving vertex and
+/// moving edge).
 #[allow(clippy::too_many_arguments)]
 fn nearby(
     s: &mut Scratch,
@@ -400,8 +402,8 @@ fn movers(motion: &Motion, vertices: &mut Vec<Mover>, edges: &mut Vec<MovingEdge
             }
         }
     }
-    // Sorted by key only (positions are not ordered), so an entry equal to another but
-    // for a repeat between them is kept: a test run twice, never one left out.
+    // Sorted by key alone (positions have no order): where one key moves two ways, two
+    // equal entries can end up apart and both stay, which only repeats their tests.
     vertices.sort_unstable_by_key(|m| m.0);
     vertices.dedup();
     edges.sort_unstable_by_key(|e| e.0);
