@@ -301,14 +301,7 @@ pub(crate) fn check_sweep(
         }
         if proximity && !too_close {
             too_close = s.vertices.iter().any(|&(k, p)| {
-                !t.has(k)
-                    && near(&[p], &t.x1, margin)
-                    && closer(
-                        proximity_vertex_triangle(p, t.x1).distance,
-                        || proximity_vertex_triangle(p, t.x0).distance,
-                        margin,
-                        false,
-                    )
+                !t.has(k) && vertex_triangle_too_close([p, p], [t.x0, t.x1], margin, false)
             });
         }
     }
@@ -331,14 +324,7 @@ pub(crate) fn check_sweep(
         }
         if proximity && !too_close {
             too_close = s.near.iter().any(|&(skey, q)| {
-                !skey.contains(&key)
-                    && near(&[x1], &q, margin)
-                    && closer(
-                        proximity_vertex_triangle(x1, q).distance,
-                        || proximity_vertex_triangle(x0, q).distance,
-                        margin,
-                        false,
-                    )
+                !skey.contains(&key) && vertex_triangle_too_close([x0, x1], [q, q], margin, false)
             });
         }
     }
@@ -362,13 +348,7 @@ pub(crate) fn check_sweep(
             too_close = s.edges.iter().any(|&(skey, q)| {
                 !skey.contains(&key[0])
                     && !skey.contains(&key[1])
-                    && near(&x1, &q, margin)
-                    && closer(
-                        proximity_edge_edge(x1[0], x1[1], q[0], q[1]).distance,
-                        || proximity_edge_edge(x0[0], x0[1], q[0], q[1]).distance,
-                        margin,
-                        false,
-                    )
+                    && edge_edge_too_close([x0, x1], [q, q], margin, false)
             });
         }
     }
@@ -410,18 +390,31 @@ fn movers(motion: &Motion, vertices: &mut Vec<Mover>, edges: &mut Vec<MovingEdge
     edges.dedup();
 }
 
-/// True when the boxes of `a` and `b` come within `eps`.
+/// True when the boxes of `a` and `b` come within `eps`: the cheap rejection in front of
+/// each distance below (nearly every gathered element is a neighbour far from the changed
+/// element but for a vertex it shares).
 fn near(a: &[DVec3], b: &[DVec3], eps: f64) -> bool {
     Aabb::from_points(a)
         .inflated(eps)
         .overlaps(&Aabb::from_points(b))
 }
 
-/// The minimum-distance rule for one pair: closer than `eps` at the end (`d1`) and, unless
-/// an element is `new`, closer than at the start (`d0`, computed only for the rare pair
-/// close at the end).
-fn closer(d1: f64, d0: impl FnOnce() -> f64, eps: f64, new: bool) -> bool {
-    d1 < eps && (new || d1 < d0())
+/// The minimum-distance rule for a vertex `p` and a triangle `t`, each given at the start
+/// and the end of the edit: closer than `eps` at the end and, unless an element is `new`,
+/// closer than at the start (computed only for the rare pair close at the end).
+fn vertex_triangle_too_close(p: [DVec3; 2], t: [[DVec3; 3]; 2], eps: f64, new: bool) -> bool {
+    near(&[p[1]], &t[1], eps) && {
+        let d1 = proximity_vertex_triangle(p[1], t[1]).distance;
+        d1 < eps && (new || d1 < proximity_vertex_triangle(p[0], t[0]).distance)
+    }
+}
+
+/// [`vertex_triangle_too_close`] for two edges `e` and `f`.
+fn edge_edge_too_close(e: [[DVec3; 2]; 2], f: [[DVec3; 2]; 2], eps: f64, new: bool) -> bool {
+    near(&e[1], &f[1], eps) && {
+        let d1 = proximity_edge_edge(e[1][0], e[1][1], f[1][0], f[1][1]).distance;
+        d1 < eps && (new || d1 < proximity_edge_edge(e[0][0], e[0][1], f[0][0], f[0][1]).distance)
+    }
 }
 
 /// CCD between two swept triangles: vertices of each against the other, edges against
@@ -608,32 +601,14 @@ fn proximity_of(
         }
         _ => true,
     };
-    // Boxes grown by `eps` reject most pairs before any distance is computed: nearly
-    // every gathered element is a neighbour far from the changed triangle but for the
-    // vertex it shares.
     for &(k, p) in &s.vertices {
-        if !key.contains(&k)
-            && near(&[p], &x1, eps)
-            && closer(
-                proximity_vertex_triangle(p, x1).distance,
-                || proximity_vertex_triangle(p, x0).distance,
-                eps,
-                new_tri,
-            )
-        {
+        if !key.contains(&k) && vertex_triangle_too_close([p, p], [x0, x1], eps, new_tri) {
             return Err(Hit::Proximity);
         }
     }
     for &(skey, q) in &s.near {
         for j in (0..3).filter(|&j| !skey.contains(&key[j])) {
-            if near(&[x1[j]], &q, eps)
-                && closer(
-                    proximity_vertex_triangle(x1[j], q).distance,
-                    || proximity_vertex_triangle(x0[j], q).distance,
-                    eps,
-                    born[j],
-                )
-            {
+            if vertex_triangle_too_close([x0[j], x1[j]], [q, q], eps, born[j]) {
                 return Err(Hit::Proximity);
             }
         }
@@ -643,14 +618,8 @@ fn proximity_of(
             if ekey.contains(&key[a]) || ekey.contains(&key[b]) {
                 continue;
             }
-            if near(&[x1[a], x1[b]], &q, eps)
-                && closer(
-                    proximity_edge_edge(x1[a], x1[b], q[0], q[1]).distance,
-                    || proximity_edge_edge(x0[a], x0[b], q[0], q[1]).distance,
-                    eps,
-                    new_edge(a, b),
-                )
-            {
+            let e = [[x0[a], x0[b]], [x1[a], x1[b]]];
+            if edge_edge_too_close(e, [q, q], eps, new_edge(a, b)) {
                 return Err(Hit::Proximity);
             }
         }
@@ -798,30 +767,15 @@ mod tests {
                     // The minimum distance, on every corner and edge of the moved triangle.
                     let p = q[k];
                     close |= !t.has(key[k])
-                        && closer(
-                            proximity_vertex_triangle(p, t.x1).distance,
-                            || proximity_vertex_triangle(p, t.x0).distance,
-                            eps,
-                            false,
-                        );
+                        && vertex_triangle_too_close([p, p], [t.x0, t.x1], eps, false);
                     close |= !key.contains(&t.key[k])
-                        && closer(
-                            proximity_vertex_triangle(t.x1[k], q).distance,
-                            || proximity_vertex_triangle(t.x0[k], q).distance,
-                            eps,
-                            false,
-                        );
+                        && vertex_triangle_too_close([t.x0[k], t.x1[k]], [q, q], eps, false);
                     for (c, d) in EDGES {
                         let shared = [key[a], key[b]]
                             .iter()
                             .any(|&x| x == t.key[c] || x == t.key[d]);
-                        close |= !shared
-                            && closer(
-                                proximity_edge_edge(t.x1[c], t.x1[d], q[a], q[b]).distance,
-                                || proximity_edge_edge(t.x0[c], t.x0[d], q[a], q[b]).distance,
-                                eps,
-                                false,
-                            );
+                        let e = [[t.x0[c], t.x0[d]], [t.x1[c], t.x1[d]]];
+                        close |= !shared && edge_edge_too_close(e, [[q[a], q[b]]; 2], eps, false);
                     }
                 }
             }

@@ -344,7 +344,7 @@ fn flood_takes_exactly_the_non_physical_unallocated_cells() {
                     && c.x & 7 == 0
                     && c.y & 7 == 0
                     && c.z & 7 == 0
-                    && r.grid.tile_is_empty(c >> 3)
+                    && r.grid.tile_cells(c >> 3) == [0; 8]
                 {
                     empty_lens_tiles += 1;
                 }

@@ -271,18 +271,12 @@ impl Grid {
         &self.cell_tris[a..b]
     }
 
-    /// The allocated cells of tile `tile` (none for a tile that does not exist).
+    /// The allocated cells of tile `tile` (8³ cells from `tile · 8`; none for a tile that
+    /// does not exist).
     pub fn tile_cells(&self, tile: IVec3) -> TileMask {
         self.tiles
             .get(&tile)
             .map_or([0; TILE as usize], |&i| self.tile_info[i as usize].cells)
-    }
-
-    /// Whether tile `tile` (8³ cells from `tile · 8`) holds no allocated cell.
-    pub fn tile_is_empty(&self, tile: IVec3) -> bool {
-        self.tiles
-            .get(&tile)
-            .is_none_or(|&i| self.tile_info[i as usize].cells.iter().all(|&w| w == 0))
     }
 
     /// Live triangles whose bounding box lies inside a single cell, in increasing id

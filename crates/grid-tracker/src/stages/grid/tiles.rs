@@ -269,15 +269,6 @@ impl CellSet {
         new
     }
 
-    /// Adds all cells of tile `tile`; returns how many were new.
-    pub fn insert_tile(&mut self, tile: IVec3) -> usize {
-        let m = self.tiles.entry(tile).or_insert([0; TILE as usize]);
-        let new = TILE_VOLUME - mask_count(m) as usize;
-        *m = [u64::MAX; TILE as usize];
-        self.len += new;
-        new
-    }
-
     /// Adds the cells of `mask` to tile `tile`; returns how many were new.
     pub fn insert_mask(&mut self, tile: IVec3, mask: &TileMask) -> usize {
         let m = self.tiles.entry(tile).or_insert([0; TILE as usize]);
